@@ -1,0 +1,264 @@
+//! Colour frames: decoding PNG/JPEG (with EXIF orientation and focal length), resizing,
+//! and the colour spaces later stages work in (grey, CIELAB).
+
+use crate::error::{Error, Result};
+use crate::grid::Grid;
+
+/// An 8-bit sRGB colour frame; element (u, v) is `[red, green, blue]`.
+pub type Frame = Grid<[u8; 3]>;
+
+/// What the EXIF block of a photo told us.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ExifInfo {
+    /// 35 mm-equivalent focal length in millimetres (`FocalLengthIn35mmFilm`), when present and positive.
+    pub focal_35mm: Option<f64>,
+    /// Why EXIF could not be used although the file has some (corrupt block, unreadable tag).
+    /// The image itself still loads; intrinsics then fall back to the default.
+    pub warning: Option<String>,
+}
+
+/// A decoded image with the EXIF facts later stages need.
+#[derive(Clone, Debug)]
+pub struct LoadedImage {
+    /// Pixels, already turned upright according to the EXIF orientation.
+    pub frame: Frame,
+    /// EXIF focal length and any problem reading it.
+    pub exif: ExifInfo,
+}
+
+/// Decodes PNG or JPEG bytes into an upright RGB frame and reads its EXIF.
+///
+/// Errors: [`Error::Decode`] for anything that is not a complete PNG/JPEG (unknown format,
+/// truncated data). A missing or broken EXIF block is not an error: see [`ExifInfo::warning`].
+pub fn decode_image(bytes: &[u8]) -> Result<LoadedImage> {
+    let format = image::guess_format(bytes)
+        .map_err(|_| Error::Decode("not a PNG or JPEG file".to_string()))?;
+    if !matches!(format, image::ImageFormat::Png | image::ImageFormat::Jpeg) {
+        return Err(Error::Decode(format!(
+            "{format:?} images are not supported; use PNG or JPEG"
+        )));
+    }
+    let decoded = image::load_from_memory_with_format(bytes, format)
+        .map_err(|e| Error::Decode(e.to_string()))?;
+    let (orientation, exif) = read_exif(bytes);
+    let rgb = apply_orientation(decoded, orientation).to_rgb8();
+    let (width, height) = (rgb.width() as usize, rgb.height() as usize);
+    let pixels = rgb.pixels().map(|p| p.0).collect();
+    let frame = Grid::from_vec(width, height, pixels)?;
+    Ok(LoadedImage { frame, exif })
+}
+
+/// Reads a PNG/JPEG file from disk; see [`decode_image`].
+pub fn read_image_file(path: &std::path::Path) -> Result<LoadedImage> {
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    decode_image(&bytes).map_err(|e| match e {
+        Error::Decode(reason) => Error::Decode(format!("{}: {reason}", path.display())),
+        other => other,
+    })
+}
+
+/// EXIF orientation (1–8, 1 = upright) and focal length. Never fails: problems land in the warning.
+fn read_exif(bytes: &[u8]) -> (u32, ExifInfo) {
+    let mut cursor = std::io::Cursor::new(bytes);
+    let exif = match exif::Reader::new().read_from_container(&mut cursor) {
+        Ok(exif) => exif,
+        Err(exif::Error::NotFound(_)) => return (1, ExifInfo::default()),
+        Err(e) => {
+            return (
+                1,
+                ExifInfo {
+                    focal_35mm: None,
+                    warning: Some(format!(
+                        "EXIF block unreadable ({e}); using default intrinsics"
+                    )),
+                },
+            );
+        }
+    };
+    let orientation = exif
+        .get_field(exif::Tag::Orientation, exif::In::PRIMARY)
+        .and_then(|f| f.value.get_uint(0))
+        .filter(|o| (1..=8).contains(o))
+        .unwrap_or(1);
+    let focal_35mm = exif
+        .get_field(exif::Tag::FocalLengthIn35mmFilm, exif::In::PRIMARY)
+        .and_then(|f| f.value.get_uint(0))
+        .map(f64::from)
+        .filter(|f| *f > 0.0);
+    (
+        orientation,
+        ExifInfo {
+            focal_35mm,
+            warning: None,
+        },
+    )
+}
+
+/// Turns an image upright for EXIF orientation `o` (1 = as stored).
+fn apply_orientation(img: image::DynamicImage, o: u32) -> image::DynamicImage {
+    match o {
+        2 => img.fliph(),
+        3 => img.rotate180(),
+        4 => img.flipv(),
+        5 => img.rotate90().fliph(),
+        6 => img.rotate90(),
+        7 => img.rotate270().fliph(),
+        8 => img.rotate270(),
+        _ => img,
+    }
+}
+
+/// Encodes a frame as an 8-bit RGB PNG.
+pub fn encode_png(frame: &Frame) -> Result<Vec<u8>> {
+    let mut out = Vec::new();
+    let mut encoder = png::Encoder::new(&mut out, frame.width() as u32, frame.height() as u32);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let bytes: Vec<u8> = frame.data().iter().flatten().copied().collect();
+    let mut writer = encoder
+        .write_header()
+        .map_err(|e| Error::format("PNG", e.to_string()))?;
+    writer
+        .write_image_data(&bytes)
+        .map_err(|e| Error::format("PNG", e.to_string()))?;
+    writer
+        .finish()
+        .map_err(|e| Error::format("PNG", e.to_string()))?;
+    Ok(out)
+}
+
+/// The largest size with the aspect ratio of `width × height` whose long side is at most
+/// `max_side` (unchanged when already small enough). Sides are rounded to whole pixels, at least 1.
+pub fn working_size(width: usize, height: usize, max_side: usize) -> (usize, usize) {
+    let long = width.max(height);
+    if long <= max_side || long == 0 {
+        return (width, height);
+    }
+    let s = max_side as f64 / long as f64;
+    let w = ((width as f64 * s).round() as usize).clamp(1, max_side);
+    let h = ((height as f64 * s).round() as usize).clamp(1, max_side);
+    (w, h)
+}
+
+/// Resizes a frame to `width × height` with an anti-aliased triangle filter
+/// (its support widens with the downscale factor, so large photos do not alias).
+pub fn resize(frame: &Frame, width: usize, height: usize) -> Frame {
+    if frame.size() == (width, height) {
+        return frame.clone();
+    }
+    let bytes: Vec<u8> = frame.data().iter().flatten().copied().collect();
+    let Some(buffer) =
+        image::RgbImage::from_raw(frame.width() as u32, frame.height() as u32, bytes)
+    else {
+        // from_raw only fails when the buffer is too short, which a Grid rules out.
+        return frame.clone();
+    };
+    let out = image::imageops::resize(
+        &buffer,
+        width as u32,
+        height as u32,
+        image::imageops::FilterType::Triangle,
+    );
+    Grid::from_fn(width, height, |x, y| out.get_pixel(x as u32, y as u32).0)
+}
+
+/// Luma in [0, 1] (Rec. 601 weights on the gamma-encoded values, as OpenCV's grey conversion).
+pub fn to_gray(frame: &Frame) -> Grid<f32> {
+    frame.map(|&[r, g, b]| (0.299 * r as f32 + 0.587 * g as f32 + 0.114 * b as f32) / 255.0)
+}
+
+/// CIELAB (D65 white, sRGB input): L in [0, 100], a and b roughly in [−128, 127].
+pub fn to_lab(frame: &Frame) -> Grid<[f32; 3]> {
+    let lut: Vec<f32> = (0..256).map(|c| srgb_to_linear(c as f32 / 255.0)).collect();
+    frame.map(|&[r, g, b]| linear_rgb_to_lab(lut[r as usize], lut[g as usize], lut[b as usize]))
+}
+
+/// sRGB transfer function inverse: encoded value in [0, 1] to linear light.
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// Linear sRGB (each in [0, 1]) to CIELAB with the D65 white point.
+fn linear_rgb_to_lab(r: f32, g: f32, b: f32) -> [f32; 3] {
+    let x = (0.412_456_4 * r + 0.357_576_1 * g + 0.180_437_5 * b) / 0.950_47;
+    let y = 0.212_672_9 * r + 0.715_152_2 * g + 0.072_175 * b;
+    let z = (0.019_333_9 * r + 0.119_192 * g + 0.950_304_1 * b) / 1.088_83;
+    let f = |t: f32| {
+        if t > 0.008_856 {
+            t.cbrt()
+        } else {
+            7.787 * t + 16.0 / 116.0
+        }
+    };
+    let (fx, fy, fz) = (f(x), f(y), f(z));
+    [116.0 * fy - 16.0, 500.0 * (fx - fy), 200.0 * (fy - fz)]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn checker(w: usize, h: usize) -> Frame {
+        Grid::from_fn(w, h, |x, y| {
+            if (x / 4 + y / 4) % 2 == 0 {
+                [250, 20, 20]
+            } else {
+                [10, 200, 90]
+            }
+        })
+    }
+
+    #[test]
+    fn png_round_trip_keeps_pixels() {
+        let f = checker(37, 21);
+        let loaded = decode_image(&encode_png(&f).unwrap()).unwrap();
+        assert_eq!(loaded.frame, f);
+        assert_eq!(loaded.exif, ExifInfo::default());
+    }
+
+    #[test]
+    fn garbage_and_truncated_data_are_decode_errors() {
+        assert!(matches!(
+            decode_image(b"hello world"),
+            Err(Error::Decode(_))
+        ));
+        let png = encode_png(&checker(64, 64)).unwrap();
+        let truncated = &png[..png.len() / 2];
+        assert!(matches!(decode_image(truncated), Err(Error::Decode(_))));
+        assert!(matches!(decode_image(&[]), Err(Error::Decode(_))));
+    }
+
+    #[test]
+    fn working_size_keeps_aspect_and_bounds_long_side() {
+        assert_eq!(working_size(4032, 3024, 1024), (1024, 768));
+        assert_eq!(working_size(3024, 4032, 1024), (768, 1024));
+        assert_eq!(working_size(640, 480, 1024), (640, 480));
+    }
+
+    #[test]
+    fn resize_averages_colours() {
+        let small = resize(&checker(64, 64), 8, 8);
+        assert_eq!(small.size(), (8, 8));
+        // A 4-pixel checker seen through an 8× downscale is close to the mean colour.
+        let [r, g, _] = *small.get(4, 4);
+        assert!(
+            (100..=160).contains(&r) && (80..=140).contains(&g),
+            "{r} {g}"
+        );
+    }
+
+    #[test]
+    fn lab_of_white_black_and_red() {
+        let f = Grid::from_vec(3, 1, vec![[255, 255, 255], [0, 0, 0], [255, 0, 0]]).unwrap();
+        let lab = to_lab(&f);
+        let [l, a, b] = *lab.get(0, 0);
+        assert!((l - 100.0).abs() < 0.1 && a.abs() < 0.1 && b.abs() < 0.1);
+        assert!(lab.get(1, 0)[0].abs() < 1e-3);
+        let [l, a, b] = *lab.get(2, 0);
+        assert!((l - 53.24).abs() < 0.1 && (a - 80.09).abs() < 0.2 && (b - 67.20).abs() < 0.2);
+    }
+}

@@ -1,0 +1,17 @@
+//! Superpixel Soup: dense 3D reconstruction of a dynamic scene from two frames
+//! (Kumar, Dai, Li, ICCV 2017), for the command line and the browser.
+//!
+//! Data flows one way through plain functions, one module per stage:
+//! frames ([`image`], [`input`], [`camera`]) → flow ([`flow`]) → superpixels and graphs →
+//! unit-scale soup → scaled soup → outputs. [`formats`] reads and writes the files,
+//! [`eval`] scores results, [`synth`] renders scenes with exact ground truth.
+
+pub mod camera;
+pub mod error;
+pub mod flow;
+pub mod grid;
+pub mod image;
+pub mod input;
+
+pub use error::{Error, Result};
+pub use grid::Grid;
