@@ -12,6 +12,8 @@ pub mod flow;
 pub mod grid;
 pub mod image;
 pub mod input;
+#[cfg(target_arch = "wasm32")]
+pub mod web;
 
 pub use error::{Error, Result};
 pub use grid::Grid;
