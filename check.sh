@@ -27,6 +27,7 @@ step() {
     echo "==> $name"
     "$@" 2>&1 | tee "$logs/last.log" || status=$?
     timings+=("$name"$'\t'"$((SECONDS - start))")
+    echo "<== $name: $((SECONDS - start)) s"
     if [ "$counter" != "-" ]; then
         suites+=("$name"$'\t'"$($counter)")
     fi

@@ -50,7 +50,7 @@ async function readFile(file) {
     const bytes = new Uint8Array(await file.arrayBuffer());
     const info = wasm.decodeImageInfo(bytes);
     try {
-      setStatus('Read.');
+      setStatus(`Decoded ${file.name}.`);
       showInfo(file, info);
     } finally {
       info.free();
