@@ -8,10 +8,13 @@
 
 pub mod camera;
 pub mod error;
+pub mod eval;
 pub mod flow;
+pub mod formats;
 pub mod grid;
 pub mod image;
 pub mod input;
+pub mod rng;
 
 pub use error::{Error, Result};
 pub use grid::Grid;
