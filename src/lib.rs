@@ -7,6 +7,7 @@
 //! [`eval`] scores results, [`synth`] renders scenes with exact ground truth.
 
 pub mod camera;
+pub mod colormap;
 pub mod error;
 pub mod eval;
 pub mod flow;
