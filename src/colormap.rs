@@ -58,7 +58,8 @@ pub fn depth_picture(depth: &Grid<f32>) -> Frame {
     let span = (hi - lo).max(f32::EPSILON);
     depth.map(|&z| {
         if z.is_finite() && z > 0.0 {
-            turbo((1.0 / z - lo) / span)
+            // Skip Turbo's near-black ends so that far stays blue, distinct from unknown.
+            turbo(0.08 + 0.87 * (1.0 / z - lo) / span)
         } else {
             [0, 0, 0]
         }
@@ -71,8 +72,8 @@ mod tests {
 
     #[test]
     fn turbo_runs_from_blue_to_red() {
-        let [r0, _, b0] = turbo(0.0);
-        let [r1, _, b1] = turbo(1.0);
+        let [r0, _, b0] = turbo(0.1);
+        let [r1, _, b1] = turbo(0.9);
         assert!(b0 > r0 && r1 > b1);
         assert_eq!(turbo(-3.0), turbo(0.0));
     }
