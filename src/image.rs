@@ -38,6 +38,9 @@ pub fn decode_image(bytes: &[u8]) -> Result<LoadedImage> {
             "{format:?} images are not supported; use PNG or JPEG"
         )));
     }
+    if format == image::ImageFormat::Jpeg {
+        check_jpeg_complete(bytes)?;
+    }
     let decoded = image::load_from_memory_with_format(bytes, format)
         .map_err(|e| Error::Decode(e.to_string()))?;
     let (orientation, exif) = read_exif(bytes);
@@ -55,6 +58,45 @@ pub fn read_image_file(path: &std::path::Path) -> Result<LoadedImage> {
         Error::Decode(reason) => Error::Decode(format!("{}: {reason}", path.display())),
         other => other,
     })
+}
+
+/// Fails unless the JPEG's marker structure runs from SOI to EOI. The decoder itself fills a
+/// truncated scan with grey instead of failing, which would hand garbage pixels to the pipeline.
+fn check_jpeg_complete(bytes: &[u8]) -> Result<()> {
+    let truncated = || Error::Decode("truncated JPEG (no end-of-image marker)".to_string());
+    let mut i = 2; // after SOI
+    loop {
+        // Marker segments: FF xx, then a big-endian length that counts itself.
+        while bytes.get(i) == Some(&0xFF) && bytes.get(i + 1) == Some(&0xFF) {
+            i += 1; // fill bytes
+        }
+        let (Some(&0xFF), Some(&marker)) = (bytes.get(i), bytes.get(i + 1)) else {
+            return Err(truncated());
+        };
+        if marker == 0xD9 {
+            return Ok(());
+        }
+        let len = match (bytes.get(i + 2), bytes.get(i + 3)) {
+            (Some(&hi), Some(&lo)) => u16::from_be_bytes([hi, lo]) as usize,
+            _ => return Err(truncated()),
+        };
+        i += 2 + len;
+        if marker == 0xDA {
+            // Entropy-coded data: FF is stuffed as FF 00 and restart markers are FF D0–D7;
+            // any other FF xx is the next marker.
+            loop {
+                match (bytes.get(i), bytes.get(i + 1)) {
+                    (Some(&0xFF), Some(&next))
+                        if next != 0x00 && !(0xD0..=0xD7).contains(&next) =>
+                    {
+                        break;
+                    }
+                    (Some(_), Some(_)) => i += 1,
+                    _ => return Err(truncated()),
+                }
+            }
+        }
+    }
 }
 
 /// EXIF orientation (1–8, 1 = upright) and focal length. Never fails: problems land in the warning.

@@ -7,11 +7,15 @@
 //! [`eval`] scores results, [`synth`] renders scenes with exact ground truth.
 
 pub mod camera;
+pub mod colormap;
 pub mod error;
+pub mod eval;
 pub mod flow;
+pub mod formats;
 pub mod grid;
 pub mod image;
 pub mod input;
+pub mod rng;
 #[cfg(target_arch = "wasm32")]
 pub mod web;
 

@@ -1,0 +1,91 @@
+//! Colour maps for pictures of per-pixel quantities (depth maps, legends).
+
+use crate::grid::Grid;
+use crate::image::Frame;
+
+/// Colour of the Turbo colour map (Mikhailov 2019, polynomial fit) at `t` in [0, 1]
+/// (clamped): dark blue at 0 through green to dark red at 1.
+pub fn turbo(t: f32) -> [u8; 3] {
+    let t = t.clamp(0.0, 1.0) as f64;
+    let poly = |c: [f64; 6]| {
+        let v = c[0] + t * (c[1] + t * (c[2] + t * (c[3] + t * (c[4] + t * c[5]))));
+        (v.clamp(0.0, 1.0) * 255.0).round() as u8
+    };
+    [
+        poly([
+            0.135_721_38,
+            4.615_392_6,
+            -42.660_322_58,
+            132.131_082_34,
+            -152.942_393_96,
+            59.286_379_43,
+        ]),
+        poly([
+            0.091_402_61,
+            2.194_188_39,
+            4.842_966_58,
+            -14.185_033_33,
+            4.277_298_55,
+            2.829_566_04,
+        ]),
+        poly([
+            0.106_673_3,
+            12.641_946_08,
+            -60.582_048_36,
+            110.362_767_71,
+            -89.903_109_12,
+            27.348_249_81,
+        ]),
+    ]
+}
+
+/// A picture of a depth map: near is warm (red), far is cool (blue), on inverse depth so that
+/// near structure gets most of the colour range; unknown depth (NaN, ≤ 0) is black. The range is
+/// the 2nd–98th percentile of the valid inverse depths, so a few outliers do not wash it out.
+pub fn depth_picture(depth: &Grid<f32>) -> Frame {
+    let mut inverse: Vec<f32> = depth
+        .data()
+        .iter()
+        .filter(|z| z.is_finite() && **z > 0.0)
+        .map(|z| 1.0 / z)
+        .collect();
+    if inverse.is_empty() {
+        return depth.map(|_| [0, 0, 0]);
+    }
+    inverse.sort_by(f32::total_cmp);
+    let lo = inverse[inverse.len() * 2 / 100];
+    let hi = inverse[(inverse.len() * 98 / 100).min(inverse.len() - 1)];
+    let span = (hi - lo).max(f32::EPSILON);
+    depth.map(|&z| {
+        if z.is_finite() && z > 0.0 {
+            // Skip Turbo's near-black ends so that far stays blue, distinct from unknown.
+            turbo(0.08 + 0.87 * (1.0 / z - lo) / span)
+        } else {
+            [0, 0, 0]
+        }
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn turbo_runs_from_blue_to_red() {
+        let [r0, _, b0] = turbo(0.1);
+        let [r1, _, b1] = turbo(0.9);
+        assert!(b0 > r0 && r1 > b1);
+        assert_eq!(turbo(-3.0), turbo(0.0));
+    }
+
+    #[test]
+    fn near_is_red_far_is_blue_unknown_is_black() {
+        let depth = Grid::from_vec(3, 1, vec![1.0, 10.0, f32::NAN]).unwrap();
+        let pic = depth_picture(&depth);
+        let [r, _, b] = *pic.get(0, 0);
+        assert!(r > b, "near should be warm");
+        let [r, _, b] = *pic.get(1, 0);
+        assert!(b > r, "far should be cool");
+        assert_eq!(*pic.get(2, 0), [0, 0, 0]);
+    }
+}

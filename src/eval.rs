@@ -1,0 +1,199 @@
+//! Accuracy metrics against ground truth, as defined in `../shared/eval/README.md`.
+//!
+//! Depth is known only up to one global scale, so every depth metric first aligns the estimate:
+//! - MRE and δ<1.25 use s = median(z_gt / z) over pixels valid in both maps (the eval README);
+//! - AbsRel uses the monocular-depth convention s = median(z_gt) / median(z).
+//!
+//! A depth is valid when finite and > 0; a flow vector when both components are finite.
+
+use std::path::PathBuf;
+
+use serde::Serialize;
+
+use crate::error::{Error, Result};
+use crate::flow::{FlowField, is_known};
+use crate::grid::Grid;
+
+/// Depth accuracy of an estimate against ground truth.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct DepthMetrics {
+    /// Mean relative error mean(|z_gt − s·z| / z_gt) with s = median(z_gt / z).
+    pub mre: f64,
+    /// mean(|s'·z − z_gt| / z_gt) with s' = median(z_gt) / median(z).
+    pub abs_rel: f64,
+    /// Share of pixels with max(s·z / z_gt, z_gt / (s·z)) < 1.25.
+    pub delta_125: f64,
+    /// Share of valid ground-truth pixels that have an estimate.
+    pub coverage: f64,
+    /// The scale s applied for MRE and δ.
+    pub scale: f64,
+    /// Pixels scored (valid in both maps).
+    pub pixels: usize,
+}
+
+/// Scores `est` against `gt` (same size). Fails when sizes differ or no pixel is valid in both.
+pub fn depth_metrics(gt: &Grid<f32>, est: &Grid<f32>) -> Result<DepthMetrics> {
+    gt.check_same_size(est)?;
+    let valid = |z: f32| z.is_finite() && z > 0.0;
+    let gt_valid = gt.data().iter().filter(|&&z| valid(z)).count();
+    let pairs: Vec<(f64, f64)> = gt
+        .data()
+        .iter()
+        .zip(est.data())
+        .filter(|&(&g, &e)| valid(g) && valid(e))
+        .map(|(&g, &e)| (g as f64, e as f64))
+        .collect();
+    if pairs.is_empty() {
+        return Err(Error::InvalidParameter(
+            "no pixel has both a ground-truth depth and an estimate".into(),
+        ));
+    }
+    let n = pairs.len() as f64;
+    let scale = median(pairs.iter().map(|(g, e)| g / e).collect());
+    let mre = pairs
+        .iter()
+        .map(|(g, e)| (g - scale * e).abs() / g)
+        .sum::<f64>()
+        / n;
+    let delta_125 = pairs
+        .iter()
+        .filter(|(g, e)| {
+            let r = scale * e / g;
+            r.max(1.0 / r) < 1.25
+        })
+        .count() as f64
+        / n;
+    let s_rel =
+        median(pairs.iter().map(|p| p.0).collect()) / median(pairs.iter().map(|p| p.1).collect());
+    let abs_rel = pairs
+        .iter()
+        .map(|(g, e)| (s_rel * e - g).abs() / g)
+        .sum::<f64>()
+        / n;
+    Ok(DepthMetrics {
+        mre,
+        abs_rel,
+        delta_125,
+        coverage: pairs.len() as f64 / gt_valid as f64,
+        scale,
+        pixels: pairs.len(),
+    })
+}
+
+/// Flow accuracy of an estimate against ground truth.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct FlowMetrics {
+    /// Average end-point error ‖f_est − f_gt‖ in pixels over pixels known in both.
+    pub epe: f64,
+    /// Share of those pixels with end-point error > 3 px and > 5 % of the GT magnitude (KITTI Fl).
+    pub outliers: f64,
+    /// Share of known ground-truth pixels that have an estimate.
+    pub coverage: f64,
+    /// Pixels scored.
+    pub pixels: usize,
+}
+
+/// Scores flow `est` against `gt` (same size); unknown vectors are skipped.
+pub fn flow_metrics(gt: &FlowField, est: &FlowField) -> Result<FlowMetrics> {
+    gt.check_same_size(est)?;
+    let gt_known = gt.data().iter().filter(|&&f| is_known(f)).count();
+    let errors: Vec<(f64, f64)> = gt
+        .data()
+        .iter()
+        .zip(est.data())
+        .filter(|&(&g, &e)| is_known(g) && is_known(e))
+        .map(|(g, e)| {
+            let err = ((g[0] - e[0]) as f64).hypot((g[1] - e[1]) as f64);
+            (err, (g[0] as f64).hypot(g[1] as f64))
+        })
+        .collect();
+    if errors.is_empty() {
+        return Err(Error::InvalidParameter(
+            "no pixel has both a ground-truth flow and an estimate".into(),
+        ));
+    }
+    let n = errors.len() as f64;
+    Ok(FlowMetrics {
+        epe: errors.iter().map(|e| e.0).sum::<f64>() / n,
+        outliers: errors
+            .iter()
+            .filter(|(e, m)| *e > 3.0 && *e > 0.05 * m)
+            .count() as f64
+            / n,
+        coverage: errors.len() as f64 / gt_known as f64,
+        pixels: errors.len(),
+    })
+}
+
+/// Median of a non-empty list (upper median for even lengths).
+pub fn median(mut values: Vec<f64>) -> f64 {
+    let mid = values.len() / 2;
+    let (_, m, _) = values.select_nth_unstable_by(mid, f64::total_cmp);
+    *m
+}
+
+/// The folder of the public evaluation case `name`: `$SOUP_EVAL_DIR/name` when that variable is
+/// set, else `../shared/eval/name` beside the crate. `None` when it does not exist (tests and
+/// benches then skip, saying so).
+pub fn eval_case_dir(name: &str) -> Option<PathBuf> {
+    let root = std::env::var_os("SOUP_EVAL_DIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/eval"));
+    let dir = root.join(name);
+    dir.is_dir().then_some(dir)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn perfect_depth_up_to_scale_scores_zero() {
+        let gt = Grid::from_fn(4, 4, |x, y| 1.0 + (x + y) as f32);
+        let est = gt.map(|z| z * 0.1);
+        let m = depth_metrics(&gt, &est).unwrap();
+        assert!(m.mre < 1e-6 && m.abs_rel < 1e-6);
+        assert!((m.scale - 10.0).abs() < 1e-5);
+        assert_eq!((m.delta_125, m.coverage, m.pixels), (1.0, 1.0, 16));
+    }
+
+    #[test]
+    fn hand_computed_errors_and_coverage() {
+        // gt 1,1,1,1 ; est 1,1,2,NaN → ratios 1,1,0.5 → median 1 → errors 0,0,1 → MRE 1/3.
+        let gt = Grid::from_vec(4, 1, vec![1.0, 1.0, 1.0, 1.0]).unwrap();
+        let est = Grid::from_vec(4, 1, vec![1.0, 1.0, 2.0, f32::NAN]).unwrap();
+        let m = depth_metrics(&gt, &est).unwrap();
+        assert!((m.mre - 1.0 / 3.0).abs() < 1e-12);
+        assert!((m.delta_125 - 2.0 / 3.0).abs() < 1e-12);
+        assert!((m.coverage - 0.75).abs() < 1e-12);
+        // AbsRel: medians 1 and 1 → same errors here.
+        assert!((m.abs_rel - 1.0 / 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn invalid_gt_pixels_are_ignored_and_empty_overlap_is_an_error() {
+        let gt = Grid::from_vec(3, 1, vec![f32::NAN, 0.0, 2.0]).unwrap();
+        let est = Grid::from_vec(3, 1, vec![5.0, 5.0, 4.0]).unwrap();
+        let m = depth_metrics(&gt, &est).unwrap();
+        assert_eq!((m.pixels, m.coverage), (1, 1.0));
+        let none = Grid::filled(3, 1, f32::NAN);
+        assert!(depth_metrics(&gt, &none).is_err());
+        assert!(depth_metrics(&gt, &Grid::filled(2, 1, 1.0)).is_err());
+    }
+
+    #[test]
+    fn flow_end_point_error_by_hand() {
+        let gt = Grid::from_vec(3, 1, vec![[0.0, 0.0], [3.0, 4.0], [f32::NAN, f32::NAN]]).unwrap();
+        let est = Grid::from_vec(3, 1, vec![[3.0, 4.0], [3.0, 4.0], [1.0, 1.0]]).unwrap();
+        let m = flow_metrics(&gt, &est).unwrap();
+        assert!((m.epe - 2.5).abs() < 1e-12);
+        assert!((m.outliers - 0.5).abs() < 1e-12);
+        assert_eq!((m.coverage, m.pixels), (1.0, 2));
+    }
+
+    #[test]
+    fn median_picks_the_middle() {
+        assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
+        assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 3.0);
+    }
+}
