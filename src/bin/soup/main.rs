@@ -1,1 +1,38 @@
-fn main() {}
+//! `soup`: the command-line face of the superpixel-soup library.
+//!
+//! Each subcommand lives in its own file and returns the library's error; `main` prints it as one
+//! readable line and exits non-zero.
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod synth;
+
+/// Dense 3D reconstruction of a dynamic scene from two photos (Superpixel Soup).
+#[derive(Parser)]
+#[command(name = "soup", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render the synthetic scenes (frames, exact depth and flow) in the evaluation case layout.
+    Synth(synth::Args),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result: superpixel_soup::Result<()> = match cli.command {
+        Command::Synth(args) => synth::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error}");
+            ExitCode::FAILURE
+        }
+    }
+}
