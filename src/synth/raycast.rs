@@ -457,7 +457,7 @@ mod tests {
         );
         let h = cast(
             std::slice::from_ref(&cube),
-            &ray_to(Point3::new(0.3, 0.2, 1.0)),
+            &ray_to(Point3::new(0.1, 0.05, 1.0)),
             0,
         )
         .unwrap();
