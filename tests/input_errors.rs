@@ -1,3 +1,4 @@
+#![cfg(not(target_arch = "wasm32"))]
 //! Bad input at the library's front door: every case gives a clear typed error (or, for a broken
 //! EXIF block, a readable warning while the image still loads), never a panic.
 

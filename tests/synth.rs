@@ -1,3 +1,4 @@
+#![cfg(not(target_arch = "wasm32"))]
 //! The synthetic scenes checked against themselves: the exact flow warps frame 2 onto frame 1,
 //! depth plus camera motion reproduces the flow of the static world, and the masks say what each
 //! scene is meant to contain.

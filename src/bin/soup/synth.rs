@@ -3,8 +3,12 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
+use superpixel_soup::Grid;
 use superpixel_soup::Result;
+use superpixel_soup::colormap::depth_picture;
 use superpixel_soup::formats::case::{Case, write_case};
+use superpixel_soup::formats::write_file;
+use superpixel_soup::image::{Frame, encode_png};
 use superpixel_soup::synth::{SceneKind, render};
 
 /// Render synthetic dynamic scenes with exact depth and flow, in the evaluation case layout.
@@ -18,6 +22,9 @@ pub struct Args {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1024x436", value_parser = parse_size)]
     size: (usize, usize),
+    /// Also write `preview.png` in each scene folder: frame 1, frame 2 and the depth picture stacked.
+    #[arg(long)]
+    preview: bool,
 }
 
 pub fn run(args: Args) -> Result<()> {
@@ -30,18 +37,23 @@ pub fn run(args: Args) -> Result<()> {
     for kind in scenes {
         let start = Instant::now();
         let scene = render(kind, width, height)?;
+        let depth1 = scene.depth1;
         let dir = args.out_dir.join(kind.name());
         let case = Case {
             name: kind.name().to_string(),
             frame1: scene.frame1,
             frame2: scene.frame2,
             intrinsics: Some(scene.intrinsics),
-            depth1: Some(scene.depth1),
+            depth1: Some(depth1.clone()),
             flow12: Some(scene.flow12),
             moving1: Some(scene.moving1),
             groups1: Some(scene.group1),
         };
         write_case(&dir, &case)?;
+        if args.preview {
+            let preview = stack(&[&case.frame1, &case.frame2, &depth_picture(&depth1)]);
+            write_file(&dir.join("preview.png"), &encode_png(&preview)?)?;
+        }
         println!(
             "{:<12} {width}×{height} → {} ({:.2} s)",
             kind.name(),
@@ -50,6 +62,17 @@ pub fn run(args: Args) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Frames of one width stacked top to bottom.
+fn stack(frames: &[&Frame]) -> Frame {
+    let width = frames[0].width();
+    let rows: Vec<[u8; 3]> = frames
+        .iter()
+        .flat_map(|f| f.data().iter().copied())
+        .collect();
+    let height = rows.len() / width;
+    Grid::from_fn(width, height, |x, y| rows[y * width + x])
 }
 
 /// Parses `WIDTHxHEIGHT` (also `×` or `X`).
