@@ -125,6 +125,69 @@ pub fn flow_metrics(gt: &FlowField, est: &FlowField) -> Result<FlowMetrics> {
     })
 }
 
+/// Boundary recall of a segmentation: the share of ground-truth depth discontinuities that lie
+/// within `tolerance` pixels (Chebyshev) of a label boundary; `None` when there are none.
+///
+/// A discontinuity is a 4-neighbour pair (p, q) whose depths differ by more than `jump` (relative
+/// to the nearer) and where that step is not the smooth continuation of the surface on either
+/// side: inverse depth is affine in the image on a plane, so q's depth predicted by extrapolating
+/// 1/z from the two pixels before p (and p's from the two after q) must also miss by more than
+/// `jump`. Without that test, slanted surfaces seen at grazing angles (a road near the horizon)
+/// count as discontinuities although nothing there separates two surfaces.
+pub fn boundary_recall(
+    labels: &Grid<u32>,
+    depth: &Grid<f32>,
+    jump: f32,
+    tolerance: usize,
+) -> Result<Option<f64>> {
+    labels.check_same_size(depth)?;
+    let (w, h) = labels.size();
+    let boundary = Grid::from_fn(w, h, |x, y| {
+        let l = *labels.get(x, y);
+        [(1isize, 0isize), (-1, 0), (0, 1), (0, -1)]
+            .iter()
+            .any(|&(dx, dy)| {
+                labels
+                    .get_checked(x as isize + dx, y as isize + dy)
+                    .is_some_and(|&m| m != l)
+            })
+    });
+    let t = tolerance as isize;
+    let near_boundary = |x: isize, y: isize| {
+        (-t..=t).any(|dy| (-t..=t).any(|dx| boundary.get_checked(x + dx, y + dy) == Some(&true)))
+    };
+    let z_at = |x: isize, y: isize| {
+        depth
+            .get_checked(x, y)
+            .copied()
+            .filter(|z| z.is_finite() && *z > 0.0)
+    };
+    let misses = |predicted: Option<f32>, z: f32| {
+        predicted.is_none_or(|p| p <= 0.0 || (1.0 / p - z).abs() > jump * z)
+    };
+    let (mut found, mut total) = (0usize, 0usize);
+    for y in 0..h as isize {
+        for x in 0..w as isize {
+            for (dx, dy) in [(1isize, 0isize), (0, 1)] {
+                let (Some(zp), Some(zq)) = (z_at(x, y), z_at(x + dx, y + dy)) else {
+                    continue;
+                };
+                if (zp - zq).abs() <= jump * zp.min(zq) {
+                    continue;
+                }
+                // Inverse depth extrapolated across the step from each side.
+                let before = z_at(x - dx, y - dy).map(|zb| 2.0 / zp - 1.0 / zb);
+                let after = z_at(x + 2 * dx, y + 2 * dy).map(|za| 2.0 / zq - 1.0 / za);
+                if misses(before, zq) && misses(after, zp) {
+                    total += 1;
+                    found += near_boundary(x, y) as usize;
+                }
+            }
+        }
+    }
+    Ok((total > 0).then(|| found as f64 / total as f64))
+}
+
 /// Median of a non-empty list (upper median for even lengths).
 pub fn median(mut values: Vec<f64>) -> f64 {
     let mid = values.len() / 2;
@@ -189,6 +252,23 @@ mod tests {
         assert!((m.epe - 2.5).abs() < 1e-12);
         assert!((m.outliers - 0.5).abs() < 1e-12);
         assert_eq!((m.coverage, m.pixels), (1.0, 2));
+    }
+
+    #[test]
+    fn boundary_recall_counts_discontinuities_near_label_edges() {
+        // Depth jumps between columns 4 and 5; labels split at column 5 (recall 1) or 9 (recall 0).
+        let depth = Grid::from_fn(10, 4, |x, _| if x < 5 { 1.0 } else { 2.0 });
+        // A slanted plane (inverse depth affine in x) with steps > 5 % has no discontinuity.
+        let slanted = Grid::from_fn(10, 4, |x, _| 1.0 / (1.0 - 0.09 * x as f32));
+        let good = Grid::from_fn(10, 4, |x, _| (x >= 5) as u32);
+        let bad = Grid::from_fn(10, 4, |x, _| (x >= 9) as u32);
+        assert_eq!(boundary_recall(&bad, &slanted, 0.05, 2).unwrap(), None);
+        assert_eq!(boundary_recall(&good, &depth, 0.05, 2).unwrap(), Some(1.0));
+        assert_eq!(boundary_recall(&bad, &depth, 0.05, 2).unwrap(), Some(0.0));
+        assert_eq!(
+            boundary_recall(&good, &Grid::filled(10, 4, 3.0), 0.05, 2).unwrap(),
+            None
+        );
     }
 
     #[test]

@@ -16,6 +16,7 @@ pub mod grid;
 pub mod image;
 pub mod input;
 pub mod rng;
+pub mod superpixels;
 pub mod synth;
 #[cfg(target_arch = "wasm32")]
 pub mod web;

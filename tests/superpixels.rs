@@ -1,0 +1,167 @@
+//! SLIC and the superpixel graphs on the synthetic scenes (exact depth for boundary recall) and on
+//! a real photo pair from `../shared/eval/` when present.
+#![cfg(not(target_arch = "wasm32"))]
+
+use superpixel_soup::eval::{boundary_recall, eval_case_dir};
+use superpixel_soup::formats::case::read_case;
+use superpixel_soup::grid::Grid;
+use superpixel_soup::image::Frame;
+use superpixel_soup::superpixels::graph::{boundary_graph, knn_graph};
+use superpixel_soup::superpixels::{SlicParams, Superpixels, slic};
+use superpixel_soup::synth::{SceneKind, render};
+
+/// Every label is exactly one 4-connected region, labels have no gaps, the count is within ±15 %
+/// of the request and no superpixel is tiny.
+fn check_segmentation(sp: &Superpixels, requested: usize) {
+    let (w, h) = sp.labels.size();
+    let n = sp.len();
+    assert!(
+        (n as f64 - requested as f64).abs() <= 0.15 * requested as f64,
+        "{n} superpixels for {requested}"
+    );
+    assert!(sp.labels.data().iter().all(|&l| (l as usize) < n));
+    let mut seen = vec![false; w * h];
+    for (label, seg) in sp.segments.iter().enumerate() {
+        assert!(
+            seg.pixels.len() >= 8,
+            "superpixel {label} has {} pixels",
+            seg.pixels.len()
+        );
+        // Flood fill from the first pixel within the label must reach all of its pixels.
+        let mut stack = vec![seg.pixels[0] as usize];
+        seen[seg.pixels[0] as usize] = true;
+        let mut reached = 0;
+        while let Some(p) = stack.pop() {
+            reached += 1;
+            let (x, y) = (p % w, p / w);
+            for (nx, ny) in [
+                (x.wrapping_sub(1), y),
+                (x + 1, y),
+                (x, y.wrapping_sub(1)),
+                (x, y + 1),
+            ] {
+                if nx < w && ny < h && !seen[ny * w + nx] && *sp.labels.get(nx, ny) == label as u32
+                {
+                    seen[ny * w + nx] = true;
+                    stack.push(ny * w + nx);
+                }
+            }
+        }
+        assert_eq!(
+            reached,
+            seg.pixels.len(),
+            "superpixel {label} is not one connected region"
+        );
+        let [x0, y0, x1, y1] = seg.bbox;
+        assert!(
+            seg.anchor[0] >= x0 as f64
+                && seg.anchor[0] <= x1 as f64
+                && seg.anchor[1] >= y0 as f64
+                && seg.anchor[1] <= y1 as f64
+        );
+    }
+}
+
+#[test]
+fn synthetic_scenes_segment_cleanly_with_high_boundary_recall() {
+    for kind in SceneKind::ALL {
+        let scene = render(kind, 512, 218).unwrap();
+        // 1500 superpixels at 1024×436 have the same size as 375 at 512×218.
+        let params = SlicParams {
+            count: 375,
+            ..SlicParams::default()
+        };
+        let sp = slic(&scene.frame1, &params).unwrap();
+        check_segmentation(&sp, 375);
+        let recall = boundary_recall(&sp.labels, &scene.depth1, 0.05, 2)
+            .unwrap()
+            .unwrap();
+        println!(
+            "{}: {} superpixels, boundary recall {recall:.3}",
+            kind.name(),
+            sp.len()
+        );
+        assert!(recall >= 0.9, "{}: boundary recall {recall}", kind.name());
+    }
+}
+
+#[test]
+fn graphs_are_consistent_with_the_labels() {
+    let scene = render(SceneKind::Street, 256, 110).unwrap();
+    let sp = slic(
+        &scene.frame1,
+        &SlicParams {
+            count: 100,
+            ..SlicParams::default()
+        },
+    )
+    .unwrap();
+    let g = boundary_graph(&sp, &scene.frame1);
+    let adj = g.adjacency(sp.len());
+    assert!(
+        adj.iter().all(|a| !a.is_empty()),
+        "every superpixel touches another"
+    );
+    for e in &g.edges {
+        for &(p, q) in &e.pairs {
+            assert_eq!(
+                (sp.labels.data()[p as usize], sp.labels.data()[q as usize]),
+                (e.a, e.b)
+            );
+        }
+    }
+    let knn = knn_graph(&sp, 15, 3.0);
+    for (i, list) in knn.neighbours.iter().enumerate() {
+        assert_eq!(list.len(), 15);
+        assert!(
+            list.iter()
+                .all(|&(k, w)| k as usize != i && w > 0.0 && w <= 1.0)
+        );
+        assert!(
+            list.windows(2).all(|p| p[0].1 >= p[1].1 - 1e-12),
+            "nearest first"
+        );
+    }
+}
+
+#[test]
+fn segmentation_is_deterministic() {
+    let frame: Frame = render(SceneKind::Crowd, 256, 110).unwrap().frame1;
+    let p = SlicParams {
+        count: 120,
+        ..SlicParams::default()
+    };
+    assert_eq!(slic(&frame, &p).unwrap(), slic(&frame, &p).unwrap());
+}
+
+#[test]
+fn real_photo_segments_cleanly() {
+    let Some(dir) = eval_case_dir("middlebury-motorcycle") else {
+        eprintln!("skipping: ../shared/eval/middlebury-motorcycle is absent");
+        return;
+    };
+    let case = read_case(&dir).unwrap();
+    let sp = slic(&case.frame1, &SlicParams::default()).unwrap();
+    check_segmentation(&sp, 1500);
+    let recall = boundary_recall(&sp.labels, case.depth1.as_ref().unwrap(), 0.05, 2)
+        .unwrap()
+        .unwrap();
+    println!(
+        "middlebury-motorcycle: {} superpixels, boundary recall {recall:.3}",
+        sp.len()
+    );
+}
+
+#[test]
+fn flat_image_still_gives_connected_superpixels() {
+    let frame = Grid::filled(200, 100, [90u8, 90, 90]);
+    let sp = slic(
+        &frame,
+        &SlicParams {
+            count: 50,
+            ..SlicParams::default()
+        },
+    )
+    .unwrap();
+    check_segmentation(&sp, 50);
+}
