@@ -122,26 +122,38 @@ fn knn_by<const D: usize>(
     k: usize,
     beta: f64,
 ) -> KnnGraph {
-    let dist2 = |a: &[f64], b: &[f64]| a.iter().zip(b).map(|(x, y)| (x - y) * (x - y)).sum::<f64>();
-    let neighbours = (0..points.len())
-        .map(|i| {
-            let mut order: Vec<(f64, usize)> = (0..points.len())
-                .filter(|&j| j != i && points[j].iter().all(|v| v.is_finite()))
-                .map(|j| (dist2(&points[i], &points[j]), j))
-                .collect();
+    let dist2 =
+        |a: &[f64; D], b: &[f64; D]| (0..D).map(|d| (a[d] - b[d]) * (a[d] - b[d])).sum::<f64>();
+    let finite: Vec<bool> = points
+        .iter()
+        .map(|p| p.iter().all(|v| v.is_finite()))
+        .collect();
+    let mut order: Vec<(f64, u32)> = Vec::with_capacity(points.len());
+    let by_distance = |a: &(f64, u32), b: &(f64, u32)| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1));
+    let neighbours = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            order.clear();
+            order.extend(
+                points
+                    .iter()
+                    .enumerate()
+                    .filter(|&(j, _)| j != i && finite[j])
+                    .map(|(j, q)| (dist2(p, q), j as u32)),
+            );
             let take = k.min(order.len());
             if take > 0 && take < order.len() {
-                order.select_nth_unstable_by(take - 1, |a, b| {
-                    a.0.total_cmp(&b.0).then(a.1.cmp(&b.1))
-                });
+                order.select_nth_unstable_by(take - 1, by_distance);
             }
             order.truncate(take);
-            order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            order.sort_by(by_distance);
             order
-                .into_iter()
-                .map(|(_, j)| {
-                    let d = dist2(&image_anchors[i], &image_anchors[j]).sqrt();
-                    (j as u32, (-beta * d).exp())
+                .iter()
+                .map(|&(_, j)| {
+                    let (a, b) = (image_anchors[i], image_anchors[j as usize]);
+                    let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
+                    (j, (-beta * d).exp())
                 })
                 .collect()
         })

@@ -57,14 +57,15 @@ pub fn slic(frame: &Frame, params: &SlicParams) -> Result<Superpixels> {
     }
     let lab = to_lab(frame);
     let (mut centres, step) = seed_centres(&lab, params.count);
+    let planar = [0, 1, 2].map(|k| lab.data().iter().map(|p| p[k]).collect::<Vec<f32>>());
     let mut labels = vec![u32::MAX; w * h];
     let mut dist = vec![f32::INFINITY; w * h];
     let spatial = (params.compactness / step) * (params.compactness / step);
     for _ in 0..params.iterations {
-        assign(&lab, &centres, step, spatial, &mut labels, &mut dist);
+        assign(&planar, w, &centres, step, spatial, &mut labels, &mut dist);
         update_centres(&lab, &labels, &mut centres);
     }
-    assign(&lab, &centres, step, spatial, &mut labels, &mut dist);
+    assign(&planar, w, &centres, step, spatial, &mut labels, &mut dist);
     let min_size = ((step * step) / 4.0).max(1.0) as usize;
     let labels = enforce_connectivity(w, h, &labels, min_size);
     Ok(segments_of(frame, &lab, labels))
@@ -111,18 +112,19 @@ fn lowest_gradient(lab: &Grid<[f32; 3]>, x: usize, y: usize) -> (usize, usize) {
     (best.1, best.2)
 }
 
-/// Assigns each pixel to the nearest centre whose 2S × 2S window covers it.
+/// Assigns each pixel to the nearest centre whose 2S × 2S window covers it. `lab` is planar
+/// (`[L…, a…, b…]`, each `w · h` long) so the inner loop vectorises.
 fn assign(
-    lab: &Grid<[f32; 3]>,
+    lab: &[Vec<f32>; 3],
+    w: usize,
     centres: &[Centre],
     step: f32,
     spatial: f32,
     labels: &mut [u32],
     dist: &mut [f32],
 ) {
-    let (w, h) = lab.size();
+    let h = dist.len() / w;
     dist.fill(f32::INFINITY);
-    let pixels = lab.data();
     for (k, c) in centres.iter().enumerate() {
         let x0 = (c.x - step).max(0.0) as usize;
         let x1 = ((c.x + step) as usize + 1).min(w);
@@ -130,18 +132,22 @@ fn assign(
         let y1 = ((c.y + step) as usize + 1).min(h);
         for y in y0..y1 {
             let dy = y as f32 - c.y;
-            let row = y * w;
-            for x in x0..x1 {
-                let p = pixels[row + x];
-                let dx = x as f32 - c.x;
-                let dl = p[0] - c.lab[0];
-                let da = p[1] - c.lab[1];
-                let db = p[2] - c.lab[2];
-                let d = dl * dl + da * da + db * db + spatial * (dx * dx + dy * dy);
-                if d < dist[row + x] {
-                    dist[row + x] = d;
-                    labels[row + x] = k as u32;
-                }
+            let row = y * w + x0..y * w + x1;
+            let (l, a, b) = (
+                &lab[0][row.clone()],
+                &lab[1][row.clone()],
+                &lab[2][row.clone()],
+            );
+            let (dist, labels) = (&mut dist[row.clone()], &mut labels[row]);
+            let base = spatial * dy * dy;
+            for i in 0..l.len() {
+                let dx = (x0 + i) as f32 - c.x;
+                let (dl, da, db) = (l[i] - c.lab[0], a[i] - c.lab[1], b[i] - c.lab[2]);
+                let d = dl * dl + da * da + db * db + spatial * dx * dx + base;
+                // Branch-free so the loop vectorises.
+                let better = d < dist[i];
+                dist[i] = if better { d } else { dist[i] };
+                labels[i] = if better { k as u32 } else { labels[i] };
             }
         }
     }
@@ -150,24 +156,30 @@ fn assign(
 /// Moves each centre to the mean (L, a, b, x, y) of its pixels; empty clusters stay put.
 fn update_centres(lab: &Grid<[f32; 3]>, labels: &[u32], centres: &mut [Centre]) {
     let w = lab.width();
-    let mut sums = vec![[0f64; 6]; centres.len()];
-    for (i, (&l, p)) in labels.iter().zip(lab.data()).enumerate() {
-        if let Some(s) = sums.get_mut(l as usize) {
-            s[0] += p[0] as f64;
-            s[1] += p[1] as f64;
-            s[2] += p[2] as f64;
-            s[3] += (i % w) as f64;
-            s[4] += (i / w) as f64;
-            s[5] += 1.0;
+    let mut sums = vec![[0f32; 6]; centres.len()];
+    for (y, (row_labels, row)) in labels
+        .chunks_exact(w)
+        .zip(lab.data().chunks_exact(w))
+        .enumerate()
+    {
+        for (x, (&l, p)) in row_labels.iter().zip(row).enumerate() {
+            if let Some(s) = sums.get_mut(l as usize) {
+                s[0] += p[0];
+                s[1] += p[1];
+                s[2] += p[2];
+                s[3] += x as f32;
+                s[4] += y as f32;
+                s[5] += 1.0;
+            }
         }
     }
     for (c, s) in centres.iter_mut().zip(sums) {
         if s[5] > 0.0 {
             let n = s[5];
             *c = Centre {
-                lab: [(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32],
-                x: (s[3] / n) as f32,
-                y: (s[4] / n) as f32,
+                lab: [s[0] / n, s[1] / n, s[2] / n],
+                x: s[3] / n,
+                y: s[4] / n,
             };
         }
     }

@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod superpixels;
 mod synth;
 
 /// Dense 3D reconstruction of a dynamic scene from two photos (Superpixel Soup).
@@ -21,12 +22,15 @@ struct Cli {
 enum Command {
     /// Render the synthetic scenes (frames, exact depth and flow) in the evaluation case layout.
     Synth(synth::Args),
+    /// Segment an image into SLIC superpixels (16-bit label PNG, overlay and mean-colour pictures).
+    Superpixels(superpixels::Args),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: superpixel_soup::Result<()> = match cli.command {
         Command::Synth(args) => synth::run(args),
+        Command::Superpixels(args) => superpixels::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
