@@ -12,6 +12,7 @@ pub mod error;
 pub mod eval;
 pub mod flow;
 pub mod formats;
+pub mod geometry;
 pub mod grid;
 pub mod image;
 pub mod input;

@@ -1,0 +1,257 @@
+//! The essential matrix E = [t]ₓ R on normalised coordinates (x̄'ᵀ E x̄ = 0): linear estimation,
+//! decomposition into a rigid motion with the cheirality test, and the Sampson error.
+
+use nalgebra::{Matrix3, SMatrix, SymmetricEigen, Vector3};
+
+use super::{Correspondence, skew, triangulate};
+
+/// A rigid motion X' = R X + t̂ with unit translation direction t̂ (scale unknown).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Motion {
+    pub r: Matrix3<f64>,
+    pub t: Vector3<f64>,
+}
+
+impl Motion {
+    /// Its essential matrix [t̂]ₓ R.
+    pub fn essential(&self) -> Matrix3<f64> {
+        skew(&self.t) * self.r
+    }
+}
+
+/// Least-squares essential matrix from ≥ 8 correspondences (the 8-point algorithm on normalised
+/// coordinates, then projection onto the essential manifold: singular values (1, 1, 0)).
+/// `None` for fewer than 8 points or a degenerate configuration.
+pub fn eight_point(points: &[Correspondence]) -> Option<Matrix3<f64>> {
+    if points.len() < 8 {
+        return None;
+    }
+    // Hartley conditioning: centre each image's points and scale them to mean distance √2.
+    let t1 = conditioning(points.iter().map(|c| c.x1));
+    let t2 = conditioning(points.iter().map(|c| c.x2));
+    let mut ata = SMatrix::<f64, 9, 9>::zeros();
+    for c in points {
+        let (a, b) = (t1 * c.x1, t2 * c.x2);
+        let row = SMatrix::<f64, 9, 1>::from_column_slice(&[
+            b.x * a.x,
+            b.x * a.y,
+            b.x * a.z,
+            b.y * a.x,
+            b.y * a.y,
+            b.y * a.z,
+            b.z * a.x,
+            b.z * a.y,
+            b.z * a.z,
+        ]);
+        ata += row * row.transpose();
+    }
+    let eigen = SymmetricEigen::new(ata);
+    let (smallest, _) = eigen
+        .eigenvalues
+        .iter()
+        .enumerate()
+        .min_by(|a, b| a.1.total_cmp(b.1))?;
+    let e = eigen.eigenvectors.column(smallest);
+    let e =
+        t2.transpose() * Matrix3::new(e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8]) * t1;
+    let svd = e.svd(true, true);
+    let (u, v_t) = (svd.u?, svd.v_t?);
+    let projected = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 0.0)) * v_t;
+    projected.iter().all(|v| v.is_finite()).then_some(projected)
+}
+
+/// The similarity that moves `points` (z = 1) to their centroid and scales them to a mean
+/// distance of √2 from it.
+fn conditioning(points: impl Iterator<Item = Vector3<f64>> + Clone) -> Matrix3<f64> {
+    let n = points.clone().count().max(1) as f64;
+    let (cx, cy) = points
+        .clone()
+        .fold((0.0, 0.0), |(x, y), p| (x + p.x, y + p.y));
+    let (cx, cy) = (cx / n, cy / n);
+    let mean = points.map(|p| (p.x - cx).hypot(p.y - cy)).sum::<f64>() / n;
+    let s = if mean > 1e-12 {
+        std::f64::consts::SQRT_2 / mean
+    } else {
+        1.0
+    };
+    Matrix3::new(s, 0.0, -s * cx, 0.0, s, -s * cy, 0.0, 0.0, 1.0)
+}
+
+/// The motion behind `e` that puts the most of `points` in front of both cameras (cheirality),
+/// among the four (R, ±t̂) candidates. `None` when no candidate has a point in front.
+pub fn decompose(e: &Matrix3<f64>, points: &[Correspondence]) -> Option<Motion> {
+    let svd = e.svd(true, true);
+    let (mut u, mut v_t) = (svd.u?, svd.v_t?);
+    if u.determinant() < 0.0 {
+        u = -u;
+    }
+    if v_t.determinant() < 0.0 {
+        v_t = -v_t;
+    }
+    let w = Matrix3::new(0.0, -1.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0);
+    let t = u.column(2).into_owned();
+    let candidates = [
+        Motion { r: u * w * v_t, t },
+        Motion {
+            r: u * w * v_t,
+            t: -t,
+        },
+        Motion {
+            r: u * w.transpose() * v_t,
+            t,
+        },
+        Motion {
+            r: u * w.transpose() * v_t,
+            t: -t,
+        },
+    ];
+    let in_front = |m: &Motion| {
+        points
+            .iter()
+            .filter(|c| {
+                triangulate::depths(c, &m.r, &m.t).is_some_and(|(z1, z2)| z1 > 0.0 && z2 > 0.0)
+            })
+            .count()
+    };
+    let scores: Vec<usize> = candidates.iter().map(in_front).collect();
+    let best = (0..4).max_by_key(|&i| (scores[i], std::cmp::Reverse(i)))?;
+    (scores[best] > 0).then_some(candidates[best])
+}
+
+/// A robust motion from correspondences (normalised coordinates; `focal` in pixels converts the
+/// pixel thresholds). Minimal 8-point samples are very noisy (tens of pixels of error from 0.3 px
+/// of noise), so RANSAC scores them with a loose `loose_px` threshold, then the winner is refitted
+/// on its inliers while the threshold shrinks to `final_px` (each refit uses many points and is
+/// accurate). Returns the motion and the inlier indices at `final_px`.
+pub fn robust_motion(
+    points: &[Correspondence],
+    focal: f64,
+    iterations: usize,
+    loose_px: f64,
+    final_px: f64,
+    rng: &mut crate::rng::Rng,
+) -> Option<(Motion, Vec<usize>)> {
+    use super::ransac::{RansacParams, ransac};
+    let to_normalised = |px: f64| (px / focal) * (px / focal);
+    let params = RansacParams {
+        sample_size: 8,
+        iterations,
+        threshold: to_normalised(loose_px),
+    };
+    let subset = |idx: &[usize]| idx.iter().map(|&i| points[i]).collect::<Vec<_>>();
+    let (_, mut inliers) = ransac(
+        points.len(),
+        None,
+        &params,
+        rng,
+        |s| eight_point(&subset(s)).into_iter().collect(),
+        |e, i| sampson(e, &points[i]),
+    )?;
+    // Local optimisation: at each tighter threshold, an inner RANSAC with larger samples drawn
+    // from the current inliers (well conditioned, rarely contaminated) re-selects the inliers.
+    let mut px = loose_px;
+    while px > final_px {
+        px = (px / 2.0).max(final_px);
+        let pool = std::mem::take(&mut inliers);
+        let inner = RansacParams {
+            sample_size: pool.len().min(24),
+            iterations: 30,
+            threshold: to_normalised(px),
+        };
+        let (_, next) = ransac(
+            points.len(),
+            Some(&pool),
+            &inner,
+            rng,
+            |s| eight_point(&subset(s)).into_iter().collect(),
+            |e, i| sampson(e, &points[i]),
+        )?;
+        if next.len() < 8 {
+            return None;
+        }
+        inliers = next;
+    }
+    let e = eight_point(&subset(&inliers))?;
+    let motion = decompose(&e, &subset(&inliers))?;
+    let e = motion.essential();
+    let inliers = (0..points.len())
+        .filter(|&i| sampson(&e, &points[i]) < to_normalised(final_px))
+        .collect();
+    Some((motion, inliers))
+}
+
+/// Sampson distance² of a correspondence to the epipolar constraint of `e`, in normalised units
+/// (multiply by f² for pixels²).
+pub fn sampson(e: &Matrix3<f64>, c: &Correspondence) -> f64 {
+    let ex = e * c.x1;
+    let etx = e.transpose() * c.x2;
+    let num = c.x2.dot(&ex);
+    let den = ex.x * ex.x + ex.y * ex.y + etx.x * etx.x + etx.y * etx.y;
+    if den <= 0.0 {
+        f64::INFINITY
+    } else {
+        num * num / den
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+    use nalgebra::Rotation3;
+
+    fn scene(motion: &Motion, n: usize, noise: f64, rng: &mut Rng) -> Vec<Correspondence> {
+        (0..n)
+            .map(|_| {
+                let x = Vector3::new(
+                    rng.uniform() * 4.0 - 2.0,
+                    rng.uniform() * 2.0 - 1.0,
+                    3.0 + rng.uniform() * 7.0,
+                );
+                let x2 = motion.r * x + motion.t;
+                let jitter =
+                    |rng: &mut Rng| Vector3::new(rng.normal() * noise, rng.normal() * noise, 0.0);
+                Correspondence {
+                    x1: x / x.z + jitter(rng),
+                    x2: x2 / x2.z + jitter(rng),
+                }
+            })
+            .collect()
+    }
+
+    fn truth() -> Motion {
+        Motion {
+            r: Rotation3::from_euler_angles(0.01, 0.03, -0.02).into_inner(),
+            t: Vector3::new(0.8, 0.1, 0.3).normalize(),
+        }
+    }
+
+    #[test]
+    fn exact_points_give_the_exact_motion() {
+        let m = truth();
+        let pts = scene(&m, 30, 0.0, &mut Rng::new(1));
+        let e = eight_point(&pts).unwrap();
+        let got = decompose(&e, &pts).unwrap();
+        assert!((got.r - m.r).norm() < 1e-8 && (got.t - m.t).norm() < 1e-8);
+        assert!(pts.iter().all(|c| sampson(&e, c) < 1e-20));
+    }
+
+    #[test]
+    fn ransac_with_noise_and_outliers() {
+        let m = truth();
+        let mut rng = Rng::new(2);
+        let mut pts = scene(&m, 300, 0.3 / 800.0, &mut rng);
+        for c in pts.iter_mut().step_by(3) {
+            c.x2 += Vector3::new(rng.uniform() * 0.1 - 0.05, rng.uniform() * 0.1 - 0.05, 0.0);
+        }
+        let (got, inliers) = robust_motion(&pts, 800.0, 300, 16.0, 1.5, &mut Rng::new(3)).unwrap();
+        let true_inliers = inliers.iter().filter(|&&i| i % 3 != 0).count();
+        assert!(
+            true_inliers >= 180 && inliers.len() - true_inliers <= 10,
+            "{} inliers",
+            inliers.len()
+        );
+        assert!(got.t.dot(&m.t) > 0.999, "{:?}", got.t);
+        assert!((got.r - m.r).norm() < 5e-3);
+    }
+}
