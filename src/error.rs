@@ -38,6 +38,10 @@ pub enum Error {
         format: &'static str,
         reason: String,
     },
+    /// The two frames carry no usable parallax (identical frames, pure rotation, too little
+    /// reliable flow), so depth is unobservable.
+    #[error("no parallax: depth cannot be recovered ({0})")]
+    NoParallax(String),
     /// A parameter is out of its valid range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),

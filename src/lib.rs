@@ -16,7 +16,10 @@ pub mod geometry;
 pub mod grid;
 pub mod image;
 pub mod input;
+pub mod output;
+pub mod pipeline;
 pub mod rng;
+pub mod soup;
 pub mod superpixels;
 pub mod synth;
 #[cfg(target_arch = "wasm32")]
@@ -24,3 +27,4 @@ pub mod web;
 
 pub use error::{Error, Result};
 pub use grid::Grid;
+pub use pipeline::{FlowInput, Params, Reconstruction, Stage, reconstruct};

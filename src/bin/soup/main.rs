@@ -7,6 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
+mod eval;
 mod superpixels;
 mod synth;
 
@@ -24,6 +25,8 @@ enum Command {
     Synth(synth::Args),
     /// Segment an image into SLIC superpixels (16-bit label PNG, overlay and mean-colour pictures).
     Superpixels(superpixels::Args),
+    /// Reconstruct evaluation cases and print MRE, AbsRel, δ<1.25, coverage and time per case.
+    Eval(eval::Args),
 }
 
 fn main() -> ExitCode {
@@ -31,6 +34,7 @@ fn main() -> ExitCode {
     let result: superpixel_soup::Result<()> = match cli.command {
         Command::Synth(args) => synth::run(args),
         Command::Superpixels(args) => superpixels::run(args),
+        Command::Eval(args) => eval::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

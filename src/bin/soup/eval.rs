@@ -1,0 +1,184 @@
+//! `soup eval`: run the pipeline on evaluation cases and print accuracy per case.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use serde::Serialize;
+use superpixel_soup::camera::resolve_intrinsics;
+use superpixel_soup::eval::{DepthMetrics, depth_metrics, median};
+use superpixel_soup::formats::case::{Case, read_case};
+use superpixel_soup::formats::write_file;
+use superpixel_soup::grid::Grid;
+use superpixel_soup::image::{ExifInfo, LoadedImage};
+use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
+use superpixel_soup::output::depth_at;
+use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
+
+/// Run the reconstruction on cases in the evaluation layout and score the depth.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Case folders (frame1.png, frame2.png, intrinsics.txt, depth1.pfm, flow12.flo).
+    #[arg(required = true)]
+    cases: Vec<PathBuf>,
+    /// Use the case's ground-truth flow12.flo instead of computed flow (the oracle-flow ablation).
+    #[arg(long)]
+    gt_flow: bool,
+    /// Also write all numbers as JSON.
+    #[arg(long)]
+    json: Option<PathBuf>,
+    /// Requested number of superpixels.
+    #[arg(long, default_value_t = 1500)]
+    superpixels: usize,
+    /// Neighbours in the K-NN graph.
+    #[arg(long, default_value_t = 15)]
+    k: usize,
+}
+
+/// Numbers for one case.
+#[derive(Serialize)]
+struct CaseResult {
+    case: String,
+    metrics: DepthMetrics,
+    /// MRE with each superpixel of the unit-scale soup given its oracle scale (motion/plane error).
+    oracle_superpixel_mre: f64,
+    /// MRE with one oracle scale per ground-truth motion group (when the case has groups1.png).
+    oracle_group_mre: Option<f64>,
+    seconds: f64,
+    hypotheses: usize,
+    degenerate: usize,
+    energy_start: f64,
+    energy_end: f64,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let mut params = Params::default();
+    params.superpixels.count = args.superpixels;
+    params.k = args.k;
+    println!(
+        "| case | MRE | AbsRel | δ<1.25 | coverage | oracle-superpixel MRE | oracle-group MRE | hypotheses | seconds |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    let mut results = Vec::new();
+    for dir in &args.cases {
+        let case = read_case(dir)?;
+        let result = evaluate(&case, &params, args.gt_flow)?;
+        println!(
+            "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {} | {} | {:.2} |",
+            result.case,
+            result.metrics.mre,
+            result.metrics.abs_rel,
+            result.metrics.delta_125,
+            result.metrics.coverage,
+            result.oracle_superpixel_mre,
+            result
+                .oracle_group_mre
+                .map_or("–".into(), |m| format!("{m:.4}")),
+            result.hypotheses,
+            result.seconds
+        );
+        results.push(result);
+    }
+    if let Some(path) = &args.json {
+        let text = serde_json::to_string_pretty(&results)
+            .map_err(|e| Error::InvalidParameter(e.to_string()))?;
+        write_file(path, text.as_bytes())?;
+    }
+    Ok(())
+}
+
+fn evaluate(case: &Case, params: &Params, gt_flow: bool) -> Result<CaseResult> {
+    let gt = case.depth1.as_ref().ok_or_else(|| {
+        Error::InvalidParameter(format!(
+            "case {} has no depth1.pfm to score against",
+            case.name
+        ))
+    })?;
+    let flow = if gt_flow {
+        case.flow12.clone().ok_or_else(|| {
+            Error::InvalidParameter(format!(
+                "case {} has no flow12.flo for --gt-flow",
+                case.name
+            ))
+        })?
+    } else {
+        return Err(Error::InvalidParameter(
+            "computed flow is not part of the pipeline yet: pass --gt-flow".into(),
+        ));
+    };
+    let (w, h) = case.frame1.size();
+    let camera = resolve_intrinsics(case.intrinsics, None, w, h);
+    let loaded = |frame: &Grid<[u8; 3]>| LoadedImage {
+        frame: frame.clone(),
+        exif: ExifInfo::default(),
+    };
+    let pair = prepare_pair(
+        loaded(&case.frame1),
+        loaded(&case.frame2),
+        Some(camera.intrinsics),
+        DEFAULT_MAX_SIDE,
+    )?;
+    let start = Instant::now();
+    let rec = reconstruct(&pair, FlowInput::Given(flow), params, &mut |_, _| {})?;
+    let seconds = start.elapsed().as_secs_f64();
+    let metrics = depth_metrics(gt, &rec.depth_input)?;
+    let (oracle_superpixel_mre, oracle_group_mre) = oracles(&rec, case, gt, &camera.intrinsics);
+    Ok(CaseResult {
+        case: case.name.clone(),
+        metrics,
+        oracle_superpixel_mre,
+        oracle_group_mre,
+        seconds,
+        hypotheses: rec.report.hypotheses,
+        degenerate: rec.report.degenerate,
+        energy_start: rec.report.arap.energy_start,
+        energy_end: rec.report.arap.energy_end,
+    })
+}
+
+/// MRE of the unit-scale soup with oracle scales: per superpixel (median z_gt / z over its
+/// pixels), and per ground-truth motion group when the case has one.
+fn oracles(
+    rec: &Reconstruction,
+    case: &Case,
+    gt: &Grid<f32>,
+    k: &superpixel_soup::camera::Intrinsics,
+) -> (f64, Option<f64>) {
+    let (w, h) = gt.size();
+    let unit = depth_at(&rec.unit_soup, &rec.superpixels.labels, w, h, k);
+    let labels = &rec.superpixels.labels;
+    let (lw, lh) = labels.size();
+    let label_at = |x: usize, y: usize| {
+        let lx = ((x as f64 + 0.5) * lw as f64 / w as f64 - 0.5)
+            .round()
+            .clamp(0.0, (lw - 1) as f64) as usize;
+        let ly = ((y as f64 + 0.5) * lh as f64 / h as f64 - 0.5)
+            .round()
+            .clamp(0.0, (lh - 1) as f64) as usize;
+        *labels.get(lx, ly) as usize
+    };
+    let scaled_by = |key: &dyn Fn(usize, usize) -> usize, keys: usize| -> f64 {
+        let mut ratios = vec![Vec::new(); keys];
+        for y in 0..h {
+            for x in 0..w {
+                let (g, z) = (*gt.get(x, y), *unit.get(x, y));
+                if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
+                    ratios[key(x, y)].push(g as f64 / z as f64);
+                }
+            }
+        }
+        let scales: Vec<f64> = ratios
+            .into_iter()
+            .map(|r| if r.is_empty() { f64::NAN } else { median(r) })
+            .collect();
+        let est = Grid::from_fn(w, h, |x, y| {
+            (*unit.get(x, y) as f64 * scales[key(x, y)]) as f32
+        });
+        depth_metrics(gt, &est).map_or(f64::NAN, |m| m.mre)
+    };
+    let per_superpixel = scaled_by(&label_at, rec.superpixels.len());
+    let per_group = case
+        .groups1
+        .as_ref()
+        .map(|g| scaled_by(&|x, y| *g.get(x, y) as usize, 256));
+    (per_superpixel, per_group)
+}

@@ -1,0 +1,223 @@
+//! The public reconstruction API: two frames in, depth and point clouds of both frames out,
+//! one plain function per stage (flow → superpixels and graphs → unit-scale soup → scales →
+//! outputs). The CLI and the web page both call [`reconstruct`].
+
+use serde::Serialize;
+
+use crate::camera::Camera;
+use crate::error::{Error, Result};
+use crate::flow::{FlowField, is_known, resize_flow};
+use crate::formats::ply::PointCloud;
+use crate::grid::Grid;
+use crate::input::FramePair;
+use crate::output::{dense_depth, depth_at, point_clouds};
+use crate::soup::Soup;
+use crate::soup::arap::{ArapReport, solve_scales};
+use crate::soup::init::{InitParams, unit_scale_soup};
+use crate::superpixels::graph::{boundary_graph, knn_graph};
+use crate::superpixels::{SlicParams, Superpixels, slic};
+
+/// The pipeline's stages, in order, as reported to the progress callback.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Stage {
+    Flow,
+    Superpixels,
+    Motion,
+    Scales,
+    Outputs,
+}
+
+impl Stage {
+    /// Name shown to users.
+    pub fn name(self) -> &'static str {
+        match self {
+            Stage::Flow => "flow",
+            Stage::Superpixels => "superpixels",
+            Stage::Motion => "motion",
+            Stage::Scales => "scales",
+            Stage::Outputs => "outputs",
+        }
+    }
+}
+
+/// Every tunable of the pipeline, with the paper's defaults.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct Params {
+    pub superpixels: SlicParams,
+    /// Neighbours in the K-NN graph of the ARAP energy.
+    pub k: usize,
+    /// β of the weights exp(−β ‖s_i − s_k‖) (anchors normalised by the long side).
+    pub beta: f64,
+    pub init: InitParams,
+}
+
+impl Default for Params {
+    fn default() -> Self {
+        Params {
+            superpixels: SlicParams::default(),
+            k: 15,
+            beta: 3.0,
+            init: InitParams::default(),
+        }
+    }
+}
+
+/// Where the flow 1→2 comes from.
+#[derive(Clone, Debug)]
+pub enum FlowInput {
+    /// A given field (a `.flo` file or ground truth) at any resolution; it is resampled to the
+    /// working resolution and its known vectors are trusted.
+    Given(FlowField),
+}
+
+/// Milliseconds per stage and the solve's numbers, for `report.json` and the page.
+#[derive(Clone, Debug, Serialize)]
+pub struct Report {
+    pub camera: Camera,
+    pub working_size: (usize, usize),
+    pub input_size: (usize, usize),
+    pub params: Params,
+    pub timings_ms: Vec<(Stage, f64)>,
+    pub superpixels: usize,
+    pub degenerate: usize,
+    pub hypotheses: usize,
+    pub arap: ArapReport,
+    pub notes: Vec<String>,
+}
+
+/// The result of [`reconstruct`].
+#[derive(Clone, Debug)]
+pub struct Reconstruction {
+    /// Flow 1→2 used, at the working resolution.
+    pub flow: FlowField,
+    pub superpixels: Superpixels,
+    /// The soup before the scale solve (λ = 1: the "unorganised" soup).
+    pub unit_soup: Soup,
+    /// The soup with relative scales (Σλ = 1: the "organised" soup).
+    pub soup: Soup,
+    /// Frame-1 depth at the working resolution (NaN = unknown).
+    pub depth: Grid<f32>,
+    /// Frame-1 depth at the input resolution (NaN = unknown).
+    pub depth_input: Grid<f32>,
+    pub cloud1: PointCloud,
+    pub cloud2: PointCloud,
+    pub report: Report,
+}
+
+/// Reconstructs both frames of `pair`. `progress(stage, fraction)` is called as stages start and
+/// finish (fraction in [0, 1] within the stage).
+pub fn reconstruct(
+    pair: &FramePair,
+    flow: FlowInput,
+    params: &Params,
+    progress: &mut dyn FnMut(Stage, f32),
+) -> Result<Reconstruction> {
+    let (w, h) = pair.frame1.size();
+    let k = pair.camera.intrinsics;
+    let mut timings = Vec::new();
+    let mut clock = Clock::start();
+
+    progress(Stage::Flow, 0.0);
+    let FlowInput::Given(given) = flow;
+    let flow = resize_flow(&given, w, h);
+    let reliable = flow.map(|&f| is_known(f));
+    if flow
+        .data()
+        .iter()
+        .all(|f| is_known(*f) && f[0].abs() < 1e-3 && f[1].abs() < 1e-3)
+    {
+        return Err(Error::NoParallax(
+            "the flow is zero everywhere (identical frames?)".into(),
+        ));
+    }
+    timings.push((Stage::Flow, clock.lap()));
+
+    progress(Stage::Superpixels, 0.0);
+    let sp = slic(&pair.frame1, &params.superpixels)?;
+    let adjacency = boundary_graph(&sp, &pair.frame1).adjacency(sp.len());
+    let knn = knn_graph(&sp, params.k, params.beta);
+    timings.push((Stage::Superpixels, clock.lap()));
+
+    progress(Stage::Motion, 0.0);
+    let unit_soup = unit_scale_soup(&sp, &knn, &adjacency, &flow, &reliable, &k, &params.init)?;
+    timings.push((Stage::Motion, clock.lap()));
+
+    progress(Stage::Scales, 0.0);
+    let mut soup = unit_soup.clone();
+    let arap = solve_scales(&mut soup, &sp, &knn, &k);
+    timings.push((Stage::Scales, clock.lap()));
+
+    progress(Stage::Outputs, 0.0);
+    let depth = dense_depth(&soup, &sp.labels, &k);
+    let (iw, ih) = pair.input_size;
+    let (sx, sy) = pair.scale();
+    let k_input = k.scaled(1.0 / sx, 1.0 / sy);
+    let depth_input = depth_at(&soup, &sp.labels, iw, ih, &k_input);
+    let (cloud1, cloud2) = point_clouds(&soup, &sp.labels, &depth, &pair.frame1, &k);
+    timings.push((Stage::Outputs, clock.lap()));
+    progress(Stage::Outputs, 1.0);
+
+    let report = Report {
+        camera: pair.camera,
+        working_size: (w, h),
+        input_size: pair.input_size,
+        params: *params,
+        timings_ms: timings,
+        superpixels: sp.len(),
+        degenerate: soup
+            .pieces
+            .iter()
+            .filter(|p| p.degenerate.is_some())
+            .count(),
+        hypotheses: soup.hypotheses.len(),
+        arap,
+        notes: pair.notes.clone(),
+    };
+    Ok(Reconstruction {
+        flow,
+        superpixels: sp,
+        unit_soup,
+        soup,
+        depth,
+        depth_input,
+        cloud1,
+        cloud2,
+        report,
+    })
+}
+
+/// Wall-clock lap timer that works natively and in the browser (where `Instant` is unavailable).
+struct Clock {
+    last: f64,
+}
+
+impl Clock {
+    fn start() -> Self {
+        Clock { last: now_ms() }
+    }
+
+    /// Milliseconds since the previous lap.
+    fn lap(&mut self) -> f64 {
+        let now = now_ms();
+        let elapsed = now - self.last;
+        self.last = now;
+        elapsed
+    }
+}
+
+#[cfg(not(target_arch = "wasm32"))]
+fn now_ms() -> f64 {
+    use std::sync::OnceLock;
+    static START: OnceLock<std::time::Instant> = OnceLock::new();
+    START
+        .get_or_init(std::time::Instant::now)
+        .elapsed()
+        .as_secs_f64()
+        * 1e3
+}
+
+#[cfg(target_arch = "wasm32")]
+fn now_ms() -> f64 {
+    js_sys::Date::now()
+}

@@ -1,0 +1,70 @@
+//! The superpixel soup (the paper's sections 3–4): every superpixel becomes a planar patch with
+//! a rigid motion, first at unit translation ([`init`]: the "unorganised" soup), then with the
+//! relative scales λ solved by the as-rigid-as-possible energy ([`arap`]: the "organised" soup).
+//!
+//! Conventions (DESIGN.md): camera 1 is the world frame (x right, y down, z forward). A piece's
+//! plane is mᵀX = 1, so a pixel with normalised ray x̄ = K⁻¹[u, v, 1]ᵀ has unit-scale depth
+//! z = 1 / (mᵀx̄). Its motion is X' = R X + λ t̂; scaling a piece by λ scales its depths by λ and
+//! its plane vector m by 1/λ, so the homography K (R + t̂ mᵀ) K⁻¹ is unchanged.
+//! The later refinement step (particle BP, eq. 3–6) will take a [`Soup`] and return a refined one.
+
+pub mod arap;
+pub mod init;
+
+use nalgebra::{Matrix3, Vector3};
+use serde::Serialize;
+
+/// Why a piece has no plane of its own (it then borrows one from a neighbour).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Degeneracy {
+    /// Too few pixels with reliable flow.
+    TooFewPixels,
+    /// The correspondences do not constrain the plane (no parallax: near the epipole, far away).
+    NoParallax,
+    /// The best plane puts the patch behind a camera.
+    NegativeDepth,
+}
+
+/// One superpixel of the soup.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Piece {
+    /// Rotation of the piece's motion X' = R X + λ t̂.
+    pub r: Matrix3<f64>,
+    /// Unit translation direction t̂.
+    pub t_hat: Vector3<f64>,
+    /// Plane mᵀX = 1 at unit scale (λ = 1).
+    pub m: Vector3<f64>,
+    /// Relative scale λ (Σλ = 1 over the soup once solved).
+    pub lambda: f64,
+    /// Index of the motion hypothesis the piece uses.
+    pub hypothesis: usize,
+    /// Set when the plane could not be estimated from the piece's own pixels.
+    pub degenerate: Option<Degeneracy>,
+}
+
+impl Piece {
+    /// Depth of the pixel with normalised ray `ray` on this piece, at the piece's scale λ.
+    /// NaN when the plane puts it behind the camera or at infinity.
+    pub fn depth(&self, ray: &Vector3<f64>) -> f64 {
+        let inv = self.m.dot(ray);
+        if inv > 0.0 {
+            self.lambda / inv
+        } else {
+            f64::NAN
+        }
+    }
+
+    /// The unit-scale 3D point on the plane along `ray` (camera-1 frame).
+    pub fn unit_point(&self, ray: &Vector3<f64>) -> Vector3<f64> {
+        ray / self.m.dot(ray)
+    }
+}
+
+/// The soup: one piece per superpixel, plus the motion hypotheses they chose from.
+#[derive(Clone, Debug)]
+pub struct Soup {
+    pub pieces: Vec<Piece>,
+    /// Distinct motions (R, t̂) found; `pieces[i].hypothesis` indexes this list.
+    pub hypotheses: Vec<crate::geometry::essential::Motion>,
+}
