@@ -77,3 +77,68 @@ fn errors_are_one_line_and_exit_non_zero() {
     let out = soup(&["synth", dir.to_str().unwrap(), "--size", "big"]);
     assert!(!out.status.success());
 }
+
+#[test]
+fn reconstruct_writes_the_documented_files() {
+    let dir = temp_dir("reconstruct");
+    let out = soup(&[
+        "synth",
+        dir.to_str().unwrap(),
+        "--scene",
+        "static-room",
+        "--size",
+        "256x110",
+    ]);
+    assert!(out.status.success());
+    let case = dir.join("static-room");
+    let intrinsics = std::fs::read_to_string(case.join("intrinsics.txt")).unwrap();
+    let result = dir.join("result");
+    let path = |name: &str| case.join(name).to_str().unwrap().to_string();
+    let out = soup(&[
+        "reconstruct",
+        &path("frame1.png"),
+        &path("frame2.png"),
+        "--flow",
+        &path("flow12.flo"),
+        "--intrinsics",
+        intrinsics.trim(),
+        "--superpixels",
+        "150",
+        "--out",
+        result.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    for name in [
+        "depth.pfm",
+        "depth.png",
+        "frame1.ply",
+        "frame2.ply",
+        "flow.flo",
+        "labels.png",
+        "report.json",
+    ] {
+        assert!(result.join(name).exists(), "{name} missing");
+    }
+    let depth =
+        superpixel_soup::formats::pfm::decode(&std::fs::read(result.join("depth.pfm")).unwrap())
+            .unwrap();
+    assert_eq!(depth.size(), (256, 110));
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(result.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["camera"]["source"], "user");
+    // Without a flow file the command says what is missing.
+    let out = soup(&[
+        "reconstruct",
+        &path("frame1.png"),
+        &path("frame2.png"),
+        "--out",
+        result.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--flow"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}

@@ -10,9 +10,10 @@
 //!
 //! Solver: block coordinate descent. Pieces sharing a motion hypothesis form one block and first
 //! move together (a rigid body with one motion has one scale); then each piece is refined on its
-//! own within a band around its block. Each 1-D step is a log-spaced grid search followed by
-//! golden-section refinement, on the energy of the edges it touches. The largest block keeps its
-//! scale, which fixes the gauge during the search; λ is normalised to Σλ = 1 at the end.
+//! own within a band around its block. Block scales stay within a band around the largest
+//! block's, which also fixes the gauge during the search (DESIGN.md Pitfalls: a fast mover's
+//! cheapest state is λ → 0). Each 1-D step is a log-spaced grid search followed by golden-section
+//! refinement, on the energy of the edges it touches; λ is normalised to Σλ = 1 at the end.
 
 use nalgebra::Vector3;
 use serde::Serialize;
@@ -21,6 +22,13 @@ use super::Soup;
 use crate::camera::Intrinsics;
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::KnnGraph;
+
+/// Blocks keep their scale within [1/B, B] of the largest block's: the sane band of DESIGN.md
+/// against the collapse of fast movers, whose cheapest ARAP state is a tiny scale.
+const BLOCK_BAND: f64 = 4.0;
+
+/// A piece refines its scale within [1/B, B] of its block's.
+const PIECE_BAND: f64 = 2.0;
 
 /// What the scale solve did.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -153,8 +161,7 @@ pub fn solve_scales(
     for _ in 0..4 {
         sweeps += 1;
         for block in blocks.iter().skip(1) {
-            let current = lambda[block[0]];
-            let best = search(current / 30.0, current * 30.0, |s| {
+            let best = search(1.0 / BLOCK_BAND, BLOCK_BAND, |s| {
                 block.iter().for_each(|&i| lambda[i] = s);
                 problem.local_energy(block, &lambda, &mut seen)
             });
@@ -166,7 +173,7 @@ pub fn solve_scales(
         sweeps += 1;
         for i in 0..n {
             let current = lambda[i];
-            let best = search(current / 3.0, current * 3.0, |s| {
+            let best = search(current / PIECE_BAND, current * PIECE_BAND, |s| {
                 lambda[i] = s;
                 problem.local_energy(&[i], &lambda, &mut seen)
             });

@@ -411,7 +411,7 @@ pub fn plane(
         }
         let eig = ata.symmetric_eigenvalues();
         let (lo, hi) = (eig.min(), eig.max());
-        if !(hi > 0.0) || lo < 1e-9 * hi {
+        if hi.is_nan() || hi <= 0.0 || lo < 1e-9 * hi {
             return Err(Degeneracy::NoParallax);
         }
         m = ata.try_inverse().ok_or(Degeneracy::NoParallax)? * atb;

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod eval;
+mod reconstruct;
 mod superpixels;
 mod synth;
 
@@ -25,6 +26,8 @@ enum Command {
     Synth(synth::Args),
     /// Segment an image into SLIC superpixels (16-bit label PNG, overlay and mean-colour pictures).
     Superpixels(superpixels::Args),
+    /// Reconstruct both frames: depth.pfm, frame1.ply, frame2.ply, flow.flo, labels.png, depth.png, report.json.
+    Reconstruct(reconstruct::Args),
     /// Reconstruct evaluation cases and print MRE, AbsRel, δ<1.25, coverage and time per case.
     Eval(eval::Args),
 }
@@ -34,6 +37,7 @@ fn main() -> ExitCode {
     let result: superpixel_soup::Result<()> = match cli.command {
         Command::Synth(args) => synth::run(args),
         Command::Superpixels(args) => superpixels::run(args),
+        Command::Reconstruct(args) => reconstruct::run(args),
         Command::Eval(args) => eval::run(args),
     };
     match result {

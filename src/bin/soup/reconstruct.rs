@@ -1,0 +1,113 @@
+//! `soup reconstruct`: two photos in, depth, point clouds of both frames and a report out.
+
+use std::path::PathBuf;
+
+use superpixel_soup::camera::Intrinsics;
+use superpixel_soup::colormap::depth_picture;
+use superpixel_soup::flow::resize_flow;
+use superpixel_soup::formats::ply::{Encoding, encode};
+use superpixel_soup::formats::{flo, pfm, png16, read_file, write_file};
+use superpixel_soup::image::{encode_png, read_image_file};
+use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
+use superpixel_soup::{Error, FlowInput, Params, Result, reconstruct};
+
+/// Reconstruct a dense 3D model of both frames from two photos.
+#[derive(clap::Args)]
+pub struct Args {
+    /// Reference frame (PNG or JPEG).
+    frame1: PathBuf,
+    /// Second frame, same size as the first.
+    frame2: PathBuf,
+    /// Output folder (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Intrinsics "fx fy cx cy" in pixels of the input images (default: EXIF, else a guess).
+    #[arg(long)]
+    intrinsics: Option<String>,
+    /// Flow 1→2 as a Middlebury .flo file (any resolution; it is resampled).
+    #[arg(long)]
+    flow: Option<PathBuf>,
+    /// Requested number of superpixels.
+    #[arg(long, default_value_t = 1500)]
+    superpixels: usize,
+    /// Neighbours in the K-NN graph of the ARAP energy.
+    #[arg(long, default_value_t = 15)]
+    k: usize,
+    /// Long side of the working resolution, in pixels.
+    #[arg(long, default_value_t = DEFAULT_MAX_SIDE)]
+    max_side: usize,
+    /// Skip the refinement step (particle belief propagation; not implemented yet, so this is the
+    /// default behaviour and the flag is accepted for scripts).
+    #[arg(long)]
+    no_refine: bool,
+    /// Write PLY files as ASCII instead of binary.
+    #[arg(long)]
+    ascii: bool,
+}
+
+pub fn run(args: Args) -> Result<()> {
+    let image1 = read_image_file(&args.frame1)?;
+    let image2 = read_image_file(&args.frame2)?;
+    let user = args
+        .intrinsics
+        .as_deref()
+        .map(Intrinsics::parse)
+        .transpose()?;
+    let pair = prepare_pair(image1, image2, user, args.max_side)?;
+    let Some(flow_path) = &args.flow else {
+        return Err(Error::InvalidParameter(
+            "computed optical flow is not part of the pipeline yet: pass --flow FLOW12.flo".into(),
+        ));
+    };
+    let flow = flo::decode(&read_file(flow_path)?)?;
+    let mut params = Params::default();
+    params.superpixels.count = args.superpixels;
+    params.k = args.k;
+    let rec = reconstruct(
+        &pair,
+        FlowInput::Given(flow),
+        &params,
+        &mut |stage, fraction| {
+            if fraction == 0.0 {
+                eprintln!("{}…", stage.name());
+            }
+        },
+    )?;
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
+    let out = |name: &str| args.out.join(name);
+    let encoding = if args.ascii {
+        Encoding::Ascii
+    } else {
+        Encoding::BinaryLittleEndian
+    };
+    let (iw, ih) = pair.input_size;
+    write_file(&out("depth.pfm"), &pfm::encode(&rec.depth_input))?;
+    write_file(
+        &out("depth.png"),
+        &encode_png(&depth_picture(&rec.depth_input))?,
+    )?;
+    write_file(&out("frame1.ply"), &encode(&rec.cloud1, encoding)?)?;
+    write_file(&out("frame2.ply"), &encode(&rec.cloud2, encoding)?)?;
+    write_file(
+        &out("flow.flo"),
+        &flo::encode(&resize_flow(&rec.flow, iw, ih)),
+    )?;
+    write_file(
+        &out("labels.png"),
+        &png16::encode_labels(&rec.superpixels.labels)?,
+    )?;
+    let report = serde_json::to_string_pretty(&rec.report)
+        .map_err(|e| Error::InvalidParameter(e.to_string()))?;
+    write_file(&out("report.json"), report.as_bytes())?;
+    let total: f64 = rec.report.timings_ms.iter().map(|t| t.1).sum();
+    println!(
+        "{} superpixels, {} motion hypotheses, {} degenerate; intrinsics from {}; {:.0} ms; wrote {}",
+        rec.report.superpixels,
+        rec.report.hypotheses,
+        rec.report.degenerate,
+        rec.report.camera.source,
+        total,
+        args.out.display()
+    );
+    Ok(())
+}
