@@ -1,0 +1,58 @@
+//! Timings of the soup stages (everything after flow and superpixels: motion hypotheses,
+//! assignment, planes, ARAP scales, outputs) at 1024×436 with exact flow, single thread.
+//! Run with `cargo bench --bench soup`.
+
+mod common;
+
+use superpixel_soup::flow::is_known;
+use superpixel_soup::output::{dense_depth, point_clouds};
+use superpixel_soup::soup::arap::solve_scales;
+use superpixel_soup::soup::init::{InitParams, unit_scale_soup};
+use superpixel_soup::superpixels::graph::{boundary_graph, knn_graph};
+use superpixel_soup::superpixels::{SlicParams, slic};
+use superpixel_soup::synth::{SceneKind, render};
+
+fn main() {
+    common::print_header("Soup stages after flow and superpixels, native release, one core");
+    for kind in SceneKind::ALL {
+        let Ok(s) = render(kind, 1024, 436) else {
+            return;
+        };
+        let Ok(sp) = slic(&s.frame1, &SlicParams::default()) else {
+            return;
+        };
+        let adjacency = boundary_graph(&sp, &s.frame1).adjacency(sp.len());
+        let knn = knn_graph(&sp, 15, 3.0);
+        let reliable = s.flow12.map(|&f| is_known(f));
+        let k = s.intrinsics;
+        let params = InitParams::default();
+        let init = || unit_scale_soup(&sp, &knn, &adjacency, &s.flow12, &reliable, &k, &params);
+        let times = common::time_ms(3, init);
+        common::print_row(
+            &format!("unit-scale soup ({})", kind.name()),
+            "1024×436",
+            &times,
+        );
+        let Ok(unit) = init() else { return };
+        let times = common::time_ms(3, || {
+            let mut soup = unit.clone();
+            solve_scales(&mut soup, &sp, &knn, &k)
+        });
+        common::print_row(
+            &format!("ARAP scales ({})", kind.name()),
+            "1024×436",
+            &times,
+        );
+        let mut soup = unit.clone();
+        solve_scales(&mut soup, &sp, &knn, &k);
+        let times = common::time_ms(3, || {
+            let depth = dense_depth(&soup, &sp.labels, &k);
+            point_clouds(&soup, &sp.labels, &depth, &s.frame1, &k)
+        });
+        common::print_row(
+            &format!("depth + clouds ({})", kind.name()),
+            "1024×436",
+            &times,
+        );
+    }
+}
