@@ -3,7 +3,7 @@
 
 use nalgebra::{Matrix3, SMatrix, SymmetricEigen, Vector3};
 
-use super::{Correspondence, skew, triangulate};
+use super::{Correspondence, conditioning, skew, triangulate};
 
 /// A rigid motion X' = R X + t̂ with unit translation direction t̂ (scale unknown).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -58,23 +58,6 @@ pub fn eight_point(points: &[Correspondence]) -> Option<Matrix3<f64>> {
     let (u, v_t) = (svd.u?, svd.v_t?);
     let projected = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 0.0)) * v_t;
     projected.iter().all(|v| v.is_finite()).then_some(projected)
-}
-
-/// The similarity that moves `points` (z = 1) to their centroid and scales them to a mean
-/// distance of √2 from it.
-fn conditioning(points: impl Iterator<Item = Vector3<f64>> + Clone) -> Matrix3<f64> {
-    let n = points.clone().count().max(1) as f64;
-    let (cx, cy) = points
-        .clone()
-        .fold((0.0, 0.0), |(x, y), p| (x + p.x, y + p.y));
-    let (cx, cy) = (cx / n, cy / n);
-    let mean = points.map(|p| (p.x - cx).hypot(p.y - cy)).sum::<f64>() / n;
-    let s = if mean > 1e-12 {
-        std::f64::consts::SQRT_2 / mean
-    } else {
-        1.0
-    };
-    Matrix3::new(s, 0.0, -s * cx, 0.0, s, -s * cy, 0.0, 0.0, 1.0)
 }
 
 /// The motion behind `e` that puts the most of `points` in front of both cameras (cheirality),
