@@ -26,7 +26,8 @@ pub enum SceneKind {
     StaticRoom,
     /// A street: the camera drives forward, two cars move on their own.
     Street,
-    /// Many independently moving boxes covering most of the view.
+    /// A crowd: many people (tall boxes) walking on a floor, each its own way, covering most of
+    /// the view.
     Crowd,
     /// A waving flag (a deforming sheet) in front of a static wall.
     Flag,

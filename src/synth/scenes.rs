@@ -229,19 +229,24 @@ fn street() -> Built {
     }
 }
 
+/// People (tall boxes) standing on the floor in three staggered rows, each walking its own way:
+/// a shift along the floor and a turn about the vertical axis, so every box keeps its feet on
+/// the floor in both frames. (Boxes floating in the air would make each mover's scale
+/// unobservable from two views; standing on the floor, their contact with it fixes it.)
 fn crowd() -> Built {
     let t = |p, s, c, seed| Texture::new(p, s, c, seed);
+    const FLOOR_Y: f64 = 1.2;
     let mut objects = vec![
         wall(
-            [-12.0, -6.0, 16.0],
+            [-12.0, -6.0, 14.0],
             [24.0, 0.0, 0.0],
-            [0.0, 7.8, 0.0],
+            [0.0, 6.0 + FLOOR_Y, 0.0],
             t(Pattern::Noise, 0.8, PLASTER, 21),
         ),
         wall(
-            [-12.0, 1.8, 1.0],
+            [-12.0, FLOOR_Y, 1.0],
             [24.0, 0.0, 0.0],
-            [0.0, 0.0, 15.0],
+            [0.0, 0.0, 13.0],
             t(Pattern::Checker, 0.7, WOOD, 22),
         ),
     ];
@@ -253,18 +258,25 @@ fn crowd() -> Built {
         Pattern::Checker,
         Pattern::Gradient,
     ];
-    for row in 0..3 {
-        for col in 0..6 {
-            let i = row * 6 + col;
+    // (depth, first x, spacing, people) per row: rows further back are wider and offset by half
+    // a spacing, so feet stay visible between the people in front.
+    let rows = [
+        (6.0, -3.0, 1.2, 6),
+        (7.8, -3.9, 1.3, 7),
+        (9.8, -4.9, 1.4, 8),
+    ];
+    let mut i = 0;
+    for &(depth, first, spacing, people) in &rows {
+        for col in 0..people {
             let mut jitter = |a: f64| (rng.uniform() - 0.5) * 2.0 * a;
+            let half = [0.42 + jitter(0.07), 0.87 + jitter(0.08), 0.3 + jitter(0.05)];
             let centre = [
-                -5.0 + 2.0 * col as f64 + jitter(0.4),
-                -1.6 + 1.4 * row as f64 + jitter(0.3),
-                7.0 + jitter(2.0),
+                first + spacing * col as f64 + jitter(0.15),
+                FLOOR_Y - half[1],
+                depth + jitter(0.4),
             ];
-            let half = [0.7 + jitter(0.2), 0.6 + jitter(0.15), 0.6 + jitter(0.2)];
-            let shift = [jitter(0.28), jitter(0.12), jitter(0.3)];
-            let turn = [jitter(0.05), jitter(0.09), jitter(0.05)];
+            let shift = [jitter(0.12), 0.0, jitter(0.12)];
+            let turn = [0.0, jitter(0.06), 0.0];
             let yaw = jitter(0.6);
             let texture = t(
                 patterns[i % patterns.len()],
@@ -280,9 +292,10 @@ fn crowd() -> Built {
                 texture,
                 i as u8 + 1,
             ));
+            i += 1;
         }
     }
-    let (camera_rotation, camera_translation) = camera([0.1, 0.02, 0.1], [0.0, 0.007, 0.0]);
+    let (camera_rotation, camera_translation) = camera([0.06, 0.0, 0.1], [0.0, 0.006, 0.0]);
     Built {
         objects,
         camera_rotation,
