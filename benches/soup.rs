@@ -6,7 +6,7 @@ mod common;
 
 use superpixel_soup::flow::is_known;
 use superpixel_soup::output::{dense_depth, point_clouds};
-use superpixel_soup::soup::arap::solve_scales;
+use superpixel_soup::soup::arap::{ScaleParams, solve_scales};
 use superpixel_soup::soup::init::{InitParams, unit_scale_soup};
 use superpixel_soup::superpixels::graph::{boundary_graph, knn_graph};
 use superpixel_soup::superpixels::{SlicParams, slic};
@@ -21,11 +21,13 @@ fn main() {
         let Ok(sp) = slic(&s.frame1, &SlicParams::default()) else {
             return;
         };
-        let adjacency = boundary_graph(&sp, &s.frame1).adjacency(sp.len());
+        let boundaries = boundary_graph(&sp, &s.frame1);
+        let adjacency = boundaries.adjacency(sp.len());
         let knn = knn_graph(&sp, 15, 3.0);
         let reliable = s.flow12.map(|&f| is_known(f));
         let k = s.intrinsics;
         let params = InitParams::default();
+        let scales = ScaleParams::default();
         let init = || unit_scale_soup(&sp, &knn, &adjacency, &s.flow12, &reliable, &k, &params);
         let times = common::time_ms(3, init);
         common::print_row(
@@ -36,7 +38,7 @@ fn main() {
         let Ok(unit) = init() else { return };
         let times = common::time_ms(3, || {
             let mut soup = unit.clone();
-            solve_scales(&mut soup, &sp, &knn, &k)
+            solve_scales(&mut soup, &sp, &knn, &boundaries, &s.flow12, &k, &scales)
         });
         common::print_row(
             &format!("ARAP scales ({})", kind.name()),
@@ -44,7 +46,7 @@ fn main() {
             &times,
         );
         let mut soup = unit.clone();
-        solve_scales(&mut soup, &sp, &knn, &k);
+        solve_scales(&mut soup, &sp, &knn, &boundaries, &s.flow12, &k, &scales);
         let times = common::time_ms(3, || {
             let depth = dense_depth(&soup, &sp.labels, &k);
             point_clouds(&soup, &sp.labels, &depth, &s.frame1, &k)

@@ -12,9 +12,9 @@ use crate::grid::Grid;
 use crate::input::FramePair;
 use crate::output::{dense_depth, depth_at, point_clouds};
 use crate::soup::Soup;
-use crate::soup::arap::{ArapReport, solve_scales};
+use crate::soup::arap::{ArapReport, ScaleParams, solve_scales};
 use crate::soup::init::{InitParams, unit_scale_soup};
-use crate::superpixels::graph::{boundary_graph, knn_graph};
+use crate::superpixels::graph::{BoundaryGraph, KnnGraph, boundary_graph, knn_graph};
 use crate::superpixels::{SlicParams, Superpixels, slic};
 
 /// The pipeline's stages, in order, as reported to the progress callback.
@@ -50,6 +50,7 @@ pub struct Params {
     /// β of the weights exp(−β ‖s_i − s_k‖) (anchors normalised by the long side).
     pub beta: f64,
     pub init: InitParams,
+    pub scales: ScaleParams,
 }
 
 impl Default for Params {
@@ -59,6 +60,7 @@ impl Default for Params {
             k: 15,
             beta: 3.0,
             init: InitParams::default(),
+            scales: ScaleParams::default(),
         }
     }
 }
@@ -92,6 +94,10 @@ pub struct Reconstruction {
     /// Flow 1→2 used, at the working resolution.
     pub flow: FlowField,
     pub superpixels: Superpixels,
+    /// Touching superpixels and their boundary pixel pairs.
+    pub boundaries: BoundaryGraph,
+    /// The K-NN graph over superpixel anchors (the ARAP neighbourhoods).
+    pub knn: KnnGraph,
     /// The soup before the scale solve (λ = 1: the "unorganised" soup).
     pub unit_soup: Soup,
     /// The soup with relative scales (Σλ = 1: the "organised" soup).
@@ -135,7 +141,8 @@ pub fn reconstruct(
 
     progress(Stage::Superpixels, 0.0);
     let sp = slic(&pair.frame1, &params.superpixels)?;
-    let adjacency = boundary_graph(&sp, &pair.frame1).adjacency(sp.len());
+    let boundaries = boundary_graph(&sp, &pair.frame1);
+    let adjacency = boundaries.adjacency(sp.len());
     let knn = knn_graph(&sp, params.k, params.beta);
     timings.push((Stage::Superpixels, clock.lap()));
 
@@ -145,7 +152,7 @@ pub fn reconstruct(
 
     progress(Stage::Scales, 0.0);
     let mut soup = unit_soup.clone();
-    let arap = solve_scales(&mut soup, &sp, &knn, &k);
+    let arap = solve_scales(&mut soup, &sp, &knn, &boundaries, &flow, &k, &params.scales);
     timings.push((Stage::Scales, clock.lap()));
 
     progress(Stage::Outputs, 0.0);
@@ -177,6 +184,8 @@ pub fn reconstruct(
     Ok(Reconstruction {
         flow,
         superpixels: sp,
+        boundaries,
+        knn,
         unit_soup,
         soup,
         depth,

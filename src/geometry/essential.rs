@@ -101,23 +101,51 @@ pub fn decompose(e: &Matrix3<f64>, points: &[Correspondence]) -> Option<Motion> 
     (scores[best] > 0).then_some(candidates[best])
 }
 
+/// The minimal solver drawing RANSAC hypotheses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MinimalSolver {
+    /// Five points ([`crate::geometry::five_point`]): up to ten candidates per sample, also
+    /// valid for points on one plane (a superpixel and its neighbours often are).
+    FivePoint,
+    /// Eight points, linear: one candidate, degenerate for planar points.
+    EightPoint,
+}
+
+impl MinimalSolver {
+    fn sample_size(self) -> usize {
+        match self {
+            MinimalSolver::FivePoint => 5,
+            MinimalSolver::EightPoint => 8,
+        }
+    }
+
+    fn solve(self, sample: &[Correspondence]) -> Vec<Matrix3<f64>> {
+        match self {
+            MinimalSolver::FivePoint => super::five_point::five_point(sample),
+            MinimalSolver::EightPoint => eight_point(sample).into_iter().collect(),
+        }
+    }
+}
+
 /// A robust motion from correspondences (normalised coordinates; `focal` in pixels converts the
-/// pixel thresholds). Minimal 8-point samples are very noisy (tens of pixels of error from 0.3 px
-/// of noise), so RANSAC scores them with a loose `loose_px` threshold, then the winner is refitted
-/// on its inliers while the threshold shrinks to `final_px` (each refit uses many points and is
-/// accurate). Returns the motion and the inlier indices at `final_px`.
+/// pixel thresholds). Minimal samples are noisy (tens of pixels of error from 0.3 px of noise),
+/// so RANSAC scores them with a loose `loose_px` threshold, then the winner is locally optimised
+/// while the threshold shrinks to `final_px`: an inner RANSAC on the current inliers (larger
+/// eight-point samples, or five-point samples for the five-point solver, which must stay valid
+/// on planes). Returns the motion and the inlier indices at `final_px`.
 pub fn robust_motion(
     points: &[Correspondence],
     focal: f64,
     iterations: usize,
     loose_px: f64,
     final_px: f64,
+    solver: MinimalSolver,
     rng: &mut crate::rng::Rng,
 ) -> Option<(Motion, Vec<usize>)> {
     use super::ransac::{RansacParams, ransac};
     let to_normalised = |px: f64| (px / focal) * (px / focal);
     let params = RansacParams {
-        sample_size: 8,
+        sample_size: solver.sample_size(),
         iterations,
         threshold: to_normalised(loose_px),
     };
@@ -127,40 +155,142 @@ pub fn robust_motion(
         None,
         &params,
         rng,
-        |s| eight_point(&subset(s)).into_iter().collect(),
+        |s| solver.solve(&subset(s)),
         |e, i| sampson(e, &points[i]),
     )?;
-    // Local optimisation: at each tighter threshold, an inner RANSAC with larger samples drawn
-    // from the current inliers (well conditioned, rarely contaminated) re-selects the inliers.
     let mut px = loose_px;
-    while px > final_px {
+    let mut best = None;
+    while px > final_px || best.is_none() {
         px = (px / 2.0).max(final_px);
         let pool = std::mem::take(&mut inliers);
         let inner = RansacParams {
-            sample_size: pool.len().min(24),
+            sample_size: match solver {
+                MinimalSolver::FivePoint => 5,
+                MinimalSolver::EightPoint => pool.len().min(24),
+            },
             iterations: 30,
             threshold: to_normalised(px),
         };
-        let (_, next) = ransac(
+        let (e, next) = ransac(
             points.len(),
             Some(&pool),
             &inner,
             rng,
-            |s| eight_point(&subset(s)).into_iter().collect(),
+            |s| solver.solve(&subset(s)),
             |e, i| sampson(e, &points[i]),
         )?;
-        if next.len() < 8 {
+        if next.len() < solver.sample_size() {
             return None;
         }
         inliers = next;
+        best = Some(e);
     }
-    let e = eight_point(&subset(&inliers))?;
+    let e = match solver {
+        MinimalSolver::EightPoint => eight_point(&subset(&inliers))?,
+        MinimalSolver::FivePoint => best?,
+    };
     let motion = decompose(&e, &subset(&inliers))?;
     let e = motion.essential();
     let inliers = (0..points.len())
         .filter(|&i| sampson(&e, &points[i]) < to_normalised(final_px))
         .collect();
     Some((motion, inliers))
+}
+
+/// Refines a motion by Levenberg–Marquardt on the signed Sampson distances of `points`, starting
+/// from `start` (5 parameters: a rotation increment and a move of t̂ on the unit sphere). Staying
+/// near the start, it is safe on points from one plane, where a linear re-estimation is
+/// degenerate. Returns `start` when it cannot improve.
+pub fn refine_motion(points: &[Correspondence], start: &Motion, iterations: usize) -> Motion {
+    if points.len() < 5 {
+        return *start;
+    }
+    let residuals = |m: &Motion| -> Vec<f64> {
+        let e = m.essential();
+        points
+            .iter()
+            .map(|c| {
+                let d = sampson(&e, c).sqrt();
+                if d.is_finite() {
+                    d * c.x2.dot(&(e * c.x1)).signum()
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    };
+    let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
+    let mut current = *start;
+    let mut r0 = residuals(&current);
+    let mut c0 = cost(&r0);
+    let mut damping = 1e-3;
+    for _ in 0..iterations {
+        // Numerical Jacobian over the 5 parameters.
+        let basis = tangent_basis(&current.t);
+        let step = 1e-7;
+        let jac: Vec<Vec<f64>> = (0..5)
+            .map(|k| {
+                let mut d = [0.0; 5];
+                d[k] = step;
+                let r = residuals(&apply(&current, &d, &basis));
+                r.iter().zip(&r0).map(|(a, b)| (a - b) / step).collect()
+            })
+            .collect();
+        let mut jtj = nalgebra::SMatrix::<f64, 5, 5>::zeros();
+        let mut jtr = nalgebra::SVector::<f64, 5>::zeros();
+        for a in 0..5 {
+            for b in 0..5 {
+                jtj[(a, b)] = jac[a].iter().zip(&jac[b]).map(|(x, y)| x * y).sum();
+            }
+            jtr[a] = jac[a].iter().zip(&r0).map(|(x, y)| x * y).sum();
+        }
+        let mut improved = false;
+        for _ in 0..6 {
+            let mut m = jtj;
+            for a in 0..5 {
+                m[(a, a)] += damping * jtj[(a, a)].max(1e-12);
+            }
+            let Some(delta) = m.lu().solve(&(-jtr)) else {
+                break;
+            };
+            let d: [f64; 5] = std::array::from_fn(|k| delta[k]);
+            let candidate = apply(&current, &d, &basis);
+            let r = residuals(&candidate);
+            let c = cost(&r);
+            if c < c0 {
+                (current, r0, c0) = (candidate, r, c);
+                damping = (damping / 10.0).max(1e-9);
+                improved = true;
+                break;
+            }
+            damping *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    current
+}
+
+/// Two unit vectors orthogonal to `t` (and to each other).
+fn tangent_basis(t: &Vector3<f64>) -> [Vector3<f64>; 2] {
+    let t = t.normalize();
+    let helper = if t.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let a = t.cross(&helper).normalize();
+    [a, t.cross(&a)]
+}
+
+/// The motion moved by `d`: rotation exp([d₀ d₁ d₂]ₓ) R, translation t̂ + d₃ a + d₄ b normalised.
+fn apply(m: &Motion, d: &[f64; 5], basis: &[Vector3<f64>; 2]) -> Motion {
+    let turn = nalgebra::Rotation3::from_scaled_axis(Vector3::new(d[0], d[1], d[2]));
+    Motion {
+        r: turn.matrix() * m.r,
+        t: (m.t + basis[0] * d[3] + basis[1] * d[4]).normalize(),
+    }
 }
 
 /// Sampson distance² of a correspondence to the epipolar constraint of `e`, in normalised units
@@ -220,6 +350,19 @@ mod tests {
     }
 
     #[test]
+    fn refinement_recovers_a_perturbed_motion() {
+        let m = truth();
+        let pts = scene(&m, 60, 0.0, &mut Rng::new(4));
+        let start = Motion {
+            r: Rotation3::from_euler_angles(0.005, -0.004, 0.003).into_inner() * m.r,
+            t: (m.t + Vector3::new(0.03, -0.02, 0.01)).normalize(),
+        };
+        let got = refine_motion(&pts, &start, 20);
+        assert!((got.r - m.r).norm() < 1e-6, "{}", (got.r - m.r).norm());
+        assert!((got.t - m.t).norm() < 1e-6, "{}", (got.t - m.t).norm());
+    }
+
+    #[test]
     fn ransac_with_noise_and_outliers() {
         let m = truth();
         let mut rng = Rng::new(2);
@@ -227,7 +370,16 @@ mod tests {
         for c in pts.iter_mut().step_by(3) {
             c.x2 += Vector3::new(rng.uniform() * 0.1 - 0.05, rng.uniform() * 0.1 - 0.05, 0.0);
         }
-        let (got, inliers) = robust_motion(&pts, 800.0, 300, 16.0, 1.5, &mut Rng::new(3)).unwrap();
+        let (got, inliers) = robust_motion(
+            &pts,
+            800.0,
+            300,
+            16.0,
+            1.5,
+            MinimalSolver::EightPoint,
+            &mut Rng::new(3),
+        )
+        .unwrap();
         let true_inliers = inliers.iter().filter(|&&i| i % 3 != 0).count();
         assert!(
             true_inliers >= 180 && inliers.len() - true_inliers <= 10,

@@ -39,9 +39,37 @@ const MONOMIALS: [[u8; 3]; 20] = [
 ];
 
 /// Position of a monomial in [`MONOMIALS`].
-fn index_of(e: [u8; 3]) -> Option<usize> {
-    MONOMIALS.iter().position(|&m| m == e)
+const fn index_of(e: [u8; 3]) -> Option<usize> {
+    let mut i = 0;
+    while i < MONOMIALS.len() {
+        let m = MONOMIALS[i];
+        if m[0] == e[0] && m[1] == e[1] && m[2] == e[2] {
+            return Some(i);
+        }
+        i += 1;
+    }
+    None
 }
+
+/// `PRODUCT[i][j]`: the position of monomial i times monomial j, or `NO_TERM` above degree 3.
+const PRODUCT: [[u8; 20]; 20] = {
+    let mut table = [[NO_TERM; 20]; 20];
+    let mut i = 0;
+    while i < 20 {
+        let mut j = 0;
+        while j < 20 {
+            let (a, b) = (MONOMIALS[i], MONOMIALS[j]);
+            if let Some(k) = index_of([a[0] + b[0], a[1] + b[1], a[2] + b[2]]) {
+                table[i][j] = k as u8;
+            }
+            j += 1;
+        }
+        i += 1;
+    }
+    table
+};
+
+const NO_TERM: u8 = u8::MAX;
 
 /// A polynomial of degree ≤ 3 in (x, y, z): coefficients in the order of [`MONOMIALS`].
 #[derive(Clone, Copy, Debug)]
@@ -73,17 +101,20 @@ impl Poly {
     /// The product; terms above degree 3 cannot occur for the products used here and are dropped.
     fn mul(&self, o: &Poly) -> Poly {
         let mut p = Poly::ZERO;
+        let nonzero: Vec<(usize, f64)> =
+            o.0.iter()
+                .enumerate()
+                .filter(|&(_, &b)| b != 0.0)
+                .map(|(j, &b)| (j, b))
+                .collect();
         for (i, &a) in self.0.iter().enumerate() {
             if a == 0.0 {
                 continue;
             }
-            for (j, &b) in o.0.iter().enumerate() {
-                if b == 0.0 {
-                    continue;
-                }
-                let (ea, eb) = (MONOMIALS[i], MONOMIALS[j]);
-                if let Some(k) = index_of([ea[0] + eb[0], ea[1] + eb[1], ea[2] + eb[2]]) {
-                    p.0[k] += a * b;
+            for &(j, b) in &nonzero {
+                let k = PRODUCT[i][j];
+                if k != NO_TERM {
+                    p.0[k as usize] += a * b;
                 }
             }
         }
@@ -270,18 +301,15 @@ fn solutions(c: &[[f64; 10]; 10]) -> Vec<(f64, f64, f64)> {
         if ev.im.abs() > 1e-8 * (1.0 + ev.re.abs()) {
             continue;
         }
+        // The eigenvector with its last entry (the monomial 1) fixed to 1: least squares on
+        // (M − λI) v = 0 for the other nine entries.
         let shifted = action - SMatrix::<f64, 10, 10>::identity() * ev.re;
-        let svd = shifted.svd(false, true);
-        let Some(v_t) = svd.v_t else { continue };
-        let smallest = (0..10)
-            .min_by(|&i, &j| svd.singular_values[i].total_cmp(&svd.singular_values[j]))
-            .unwrap_or(9);
-        let v = v_t.row(smallest);
-        // The basis ends with x, y, z, 1.
-        if v[9].abs() < 1e-12 {
+        let qr = shifted.fixed_view::<10, 9>(0, 0).clone_owned().qr();
+        let rhs = -(qr.q().transpose() * shifted.column(9));
+        let Some(v) = qr.r().solve_upper_triangular(&rhs) else {
             continue;
-        }
-        out.push((v[6] / v[9], v[7] / v[9], v[8] / v[9]));
+        };
+        out.push((v[6], v[7], v[8]));
     }
     out
 }

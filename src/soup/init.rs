@@ -1,26 +1,32 @@
 //! The unit-scale soup: a rigid motion (R, t̂) and a plane m for every superpixel.
 //!
 //! 1. Correspondences: a spread-out sample of each superpixel's pixels with reliable flow.
-//! 2. Motion hypotheses: a global RANSAC (camera ego-motion), sequential RANSAC on what it leaves
-//!    (other movers), and local RANSAC on superpixels still unexplained together with their K-NN
-//!    neighbours (small or deforming parts).
-//! 3. Assignment as multi-model fitting, not a per-superpixel argmin (a planar patch is explained
-//!    by many motions equally well, DESIGN.md Pitfalls): hypotheses are ordered by support (how
-//!    many superpixels they explain), each superpixel takes the best-supported hypothesis that
-//!    explains it, then ICM sweeps with a Potts term over touching superpixels settle borders,
-//!    and each used hypothesis is refitted on the pixels assigned to it.
-//! 4. Planes: for each superpixel, m from [x̄']ₓ t̂ (x̄ᵀm) = −[x̄']ₓ R x̄ by iteratively
-//!    reweighted least squares; patches without parallax or behind the camera are flagged and
-//!    borrow a neighbour's plane and motion.
+//! 2. Motion hypotheses ([`propose`]): a global RANSAC (the camera's ego-motion) and sequential
+//!    RANSAC on what it leaves (other movers); then five-point RANSAC on each superpixel still
+//!    badly explained together with its K-NN neighbours (small movers, deforming parts).
+//! 3. Assignment as multi-model fitting (PEARL, Isack & Boykov 2012), not a per-superpixel
+//!    argmin: a planar patch is explained by many motions almost equally well (DESIGN.md
+//!    Pitfalls). The data cost of a superpixel under a hypothesis is the mean transfer error of
+//!    the hypothesis with its best plane (the paper's E_proj); touching superpixels with
+//!    different hypotheses pay a Potts penalty, and every hypothesis in use pays a label cost.
+//!    α-expansion minimises that energy; each used hypothesis is then refitted on its
+//!    superpixels and the assignment repeated.
+//! 4. Planes: each superpixel's m under its motion by IRLS ([`super::plane`]); patches without
+//!    parallax or behind the camera are flagged and borrow a touching piece's plane and motion.
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::{Degeneracy, Piece, Soup};
+use super::graphcut::{CostTable, alpha_expansion};
+use super::plane::{fit_plane, planar_cost};
+use super::{Piece, Soup};
 use crate::camera::Intrinsics;
 use crate::error::{Error, Result};
 use crate::flow::{FlowField, is_known};
-use crate::geometry::essential::{Motion, decompose, eight_point, robust_motion, sampson};
-use crate::geometry::{Correspondence, skew};
+use crate::geometry::Correspondence;
+use crate::geometry::essential::{
+    MinimalSolver, Motion, decompose, eight_point, refine_motion, robust_motion, sampson,
+};
+use crate::geometry::homography::{homography_dlt, transfer_error};
 use crate::grid::Grid;
 use crate::rng::Rng;
 use crate::superpixels::Superpixels;
@@ -29,7 +35,7 @@ use crate::superpixels::graph::KnnGraph;
 /// Settings of the unit-scale soup.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct InitParams {
-    /// Correspondences sampled per superpixel for motion fitting.
+    /// Correspondences sampled per superpixel for motion fitting and assignment.
     pub samples_per_superpixel: usize,
     /// RANSAC samples for the global and sequential motions.
     pub global_iterations: usize,
@@ -37,10 +43,14 @@ pub struct InitParams {
     pub local_iterations: usize,
     /// At most this many local RANSAC runs.
     pub max_local_hypotheses: usize,
-    /// A hypothesis explains a superpixel when its mean (truncated) Sampson error is below this, px.
+    /// A hypothesis explains a superpixel when its data cost is below this (px).
     pub explain_px: f64,
-    /// Potts penalty (px of mean Sampson error) per touching superpixel with another hypothesis.
+    /// Potts penalty (px of mean transfer error) per touching pair with different hypotheses.
     pub smoothness_px: f64,
+    /// Cost of each hypothesis in use (px of mean transfer error, summed over superpixels).
+    pub label_cost_px: f64,
+    /// A superpixel's depth counts as observed when its translation moves it by this much (px).
+    pub min_parallax_px: f64,
     /// Seed of the RANSAC sampling.
     pub seed: u64,
 }
@@ -48,19 +58,24 @@ pub struct InitParams {
 impl Default for InitParams {
     fn default() -> Self {
         InitParams {
-            samples_per_superpixel: 40,
+            samples_per_superpixel: 32,
             global_iterations: 300,
-            local_iterations: 40,
-            max_local_hypotheses: 200,
-            explain_px: 0.7,
-            smoothness_px: 0.15,
+            local_iterations: 30,
+            max_local_hypotheses: 80,
+            explain_px: 0.5,
+            smoothness_px: 0.2,
+            label_cost_px: 12.0,
+            min_parallax_px: 0.05,
             seed: 2017,
         }
     }
 }
 
-/// Sampson errors above this (px) count as this much in assignment costs.
-const TRUNCATE_PX: f64 = 3.0;
+/// Transfer errors above this (px) count as this much in data costs.
+const CAP_PX: f64 = 3.0;
+
+/// PEARL rounds: assign, refit, re-evaluate.
+const ROUNDS: usize = 3;
 
 /// Builds the unit-scale soup. `adjacency[i]` lists the superpixels touching i (boundary graph).
 ///
@@ -86,27 +101,176 @@ pub fn unit_scale_soup(
     }
     check_parallax(&all, focal)?;
     let mut rng = Rng::new(params.seed);
-    let mut hypotheses = global_hypotheses(&all, focal, params, &mut rng)?;
-    let mut cost: Vec<Vec<f64>> = hypotheses
-        .iter()
-        .map(|h| samples.iter().map(|s| mean_error(h, s, focal)).collect())
-        .collect();
-    add_local_hypotheses(
-        &samples,
-        knn,
+    let mut fit = Fitting {
+        samples: &samples,
         focal,
-        params,
-        &mut rng,
-        &mut hypotheses,
-        &mut cost,
-    );
-    let mut assignment = assign(&cost, adjacency, params);
-    refit(&samples, &mut assignment, &mut hypotheses, focal);
-    let pieces = fit_planes(sp, flow, reliable, k, &hypotheses, &assignment);
+        hypotheses: Vec::new(),
+        costs: CostTable::new(sp.len()),
+    };
+    for motion in global_hypotheses(&all, focal, params, &mut rng)? {
+        fit.add(motion, None);
+    }
+    add_local_hypotheses(&mut fit, knn, params, &mut rng);
+
+    let neighbours: Vec<Vec<(u32, f32)>> = adjacency
+        .iter()
+        .map(|list| {
+            list.iter()
+                .map(|&k| (k, params.smoothness_px as f32))
+                .collect()
+        })
+        .collect();
+    let mut assignment = vec![0usize; sp.len()];
+    for _ in 0..ROUNDS {
+        let order = fit.by_support(params.explain_px);
+        alpha_expansion(
+            &fit.costs,
+            &neighbours,
+            params.label_cost_px as f32,
+            CAP_PX as f32,
+            &order,
+            &mut assignment,
+            4,
+        );
+        if !fit.refit(&assignment) {
+            break;
+        }
+    }
+    let pieces = fit_planes(sp, flow, reliable, k, &fit.hypotheses, &assignment, params);
     Ok(Soup {
         pieces: fill_degenerate(pieces, adjacency),
-        hypotheses,
+        hypotheses: fit.hypotheses,
     })
+}
+
+/// The hypotheses found so far and their data costs on every superpixel.
+struct Fitting<'a> {
+    samples: &'a [Vec<Correspondence>],
+    focal: f64,
+    hypotheses: Vec<Motion>,
+    costs: CostTable,
+}
+
+impl Fitting<'_> {
+    /// Adds a hypothesis, evaluated on the superpixels in `near` (all when `None`; the rest get
+    /// the capped cost). Returns its index.
+    fn add(&mut self, motion: Motion, near: Option<&[usize]>) -> usize {
+        let h = self.costs.push_label(CAP_PX as f32);
+        self.hypotheses.push(motion);
+        match near {
+            Some(list) => list.iter().for_each(|&i| self.evaluate(i, h)),
+            None => (0..self.samples.len()).for_each(|i| self.evaluate(i, h)),
+        }
+        h
+    }
+
+    fn evaluate(&mut self, i: usize, h: usize) {
+        let cost = if self.samples[i].is_empty() {
+            0.0 // no reliable flow: only its neighbours decide
+        } else {
+            planar_cost(&self.samples[i], &self.hypotheses[h], self.focal, CAP_PX)
+        };
+        self.costs.set(i, h, cost as f32);
+    }
+
+    /// The best data cost of superpixel i over all hypotheses.
+    fn best(&self, i: usize) -> f32 {
+        (0..self.costs.labels())
+            .map(|h| self.costs.get(i, h))
+            .fold(f32::INFINITY, f32::min)
+    }
+
+    /// The hypotheses worth expanding, ordered by how many superpixels they explain, most first
+    /// (ties: older first). A hypothesis that explains no superpixel and is no superpixel's best
+    /// (within 0.05 px) cannot win any region and is left out.
+    fn by_support(&self, explain_px: f64) -> Vec<usize> {
+        let labels = self.costs.labels();
+        let mut support = vec![0usize; labels];
+        let mut best_somewhere = vec![false; labels];
+        for i in 0..self.costs.nodes() {
+            let best = self.best(i);
+            for (h, s) in support.iter_mut().enumerate() {
+                let c = self.costs.get(i, h);
+                if (c as f64) < explain_px {
+                    *s += 1;
+                }
+                if c <= best + 0.05 && c < CAP_PX as f32 {
+                    best_somewhere[h] = true;
+                }
+            }
+        }
+        let mut order: Vec<usize> = (0..labels)
+            .filter(|&h| support[h] > 0 || best_somewhere[h])
+            .collect();
+        order.sort_by(|&a, &b| support[b].cmp(&support[a]).then(a.cmp(&b)));
+        order
+    }
+
+    /// Refits each used hypothesis on the correspondences of its superpixels within 1.5 px of
+    /// it (Levenberg–Marquardt from the current motion, which stays valid when they all lie on
+    /// one plane), keeping the refit where it explains those superpixels better, and evaluates
+    /// it everywhere. Returns true when any hypothesis changed.
+    fn refit(&mut self, assignment: &[usize]) -> bool {
+        let loose = (0.5 / self.focal).powi(2);
+        let mut changed = false;
+        for h in 0..self.hypotheses.len() {
+            let members: Vec<usize> = (0..assignment.len())
+                .filter(|&i| assignment[i] == h)
+                .collect();
+            if members.is_empty() {
+                continue;
+            }
+            let e = self.hypotheses[h].essential();
+            let points: Vec<Correspondence> = members
+                .iter()
+                .flat_map(|&i| self.samples[i].iter().copied())
+                .filter(|c| sampson(&e, c) < loose)
+                .collect();
+            let stride = points.len().div_ceil(2000).max(1);
+            let points: Vec<Correspondence> = points.into_iter().step_by(stride).collect();
+            // Points off one plane pin the motion down: re-estimate it linearly. On one plane a
+            // linear estimate is degenerate: only polish the current motion.
+            let candidate = if is_planar(&points, self.focal) {
+                refine_motion(&points, &self.hypotheses[h], 10)
+            } else {
+                eight_point(&points)
+                    .and_then(|e| decompose(&e, &points))
+                    .map(|m| refine_motion(&points, &m, 10))
+                    .unwrap_or(self.hypotheses[h])
+            };
+            let cost = |m: &Motion| {
+                members
+                    .iter()
+                    .map(|&i| planar_cost(&self.samples[i], m, self.focal, CAP_PX))
+                    .sum::<f64>()
+            };
+            if cost(&candidate) < cost(&self.hypotheses[h]) - 1e-6 {
+                self.hypotheses[h] = candidate;
+                changed = true;
+            }
+            // Used hypotheses are known everywhere from now on.
+            (0..self.samples.len()).for_each(|i| self.evaluate(i, h));
+        }
+        changed
+    }
+}
+
+/// True when one homography transfers the points to within 0.5 px (median): they lie on one
+/// plane (or show no parallax), so they cannot pin down a motion by themselves.
+fn is_planar(points: &[Correspondence], focal: f64) -> bool {
+    let Some(h) = homography_dlt(points) else {
+        return true;
+    };
+    let mut errors: Vec<f64> = points
+        .iter()
+        .map(|c| transfer_error(&h, c) * focal)
+        .collect();
+    if errors.is_empty() {
+        return true;
+    }
+    let mid = errors.len() / 2;
+    let (_, median, _) = errors.select_nth_unstable_by(mid, f64::total_cmp);
+    *median < 0.5
 }
 
 /// Up to `per` correspondences spread over each superpixel's pixels with reliable, known flow.
@@ -190,9 +354,15 @@ fn global_hypotheses(
     let mut remaining: Vec<Correspondence> = all.iter().step_by(stride).copied().collect();
     let mut hypotheses = Vec::new();
     while hypotheses.len() < 10 && remaining.len() >= 150 {
-        let Some((motion, inliers)) =
-            robust_motion(&remaining, focal, params.global_iterations, 16.0, 1.0, rng)
-        else {
+        let Some((motion, inliers)) = robust_motion(
+            &remaining,
+            focal,
+            params.global_iterations,
+            16.0,
+            1.0,
+            MinimalSolver::EightPoint,
+            rng,
+        ) else {
             break;
         };
         if inliers.len() < 60 {
@@ -209,143 +379,61 @@ fn global_hypotheses(
     Ok(hypotheses)
 }
 
-/// Mean Sampson error (px, each truncated at [`TRUNCATE_PX`]) of `points` under `motion`.
-fn mean_error(motion: &Motion, points: &[Correspondence], focal: f64) -> f64 {
-    if points.is_empty() {
-        return TRUNCATE_PX;
-    }
-    let e = motion.essential();
-    points
-        .iter()
-        .map(|c| (sampson(&e, c).sqrt() * focal).min(TRUNCATE_PX))
-        .sum::<f64>()
-        / points.len() as f64
-}
-
-/// Local RANSAC on each still-unexplained superpixel with its K-NN neighbours, worst first.
-fn add_local_hypotheses(
-    samples: &[Vec<Correspondence>],
-    knn: &KnnGraph,
-    focal: f64,
-    params: &InitParams,
-    rng: &mut Rng,
-    hypotheses: &mut Vec<Motion>,
-    cost: &mut Vec<Vec<f64>>,
-) {
-    let best =
-        |cost: &Vec<Vec<f64>>, i: usize| cost.iter().map(|c| c[i]).fold(f64::INFINITY, f64::min);
-    let mut order: Vec<usize> = (0..samples.len())
-        .filter(|&i| samples[i].len() >= 8)
-        .collect();
-    order.sort_by(|&a, &b| best(cost, b).total_cmp(&best(cost, a)).then(a.cmp(&b)));
+/// Five-point RANSAC on still badly explained superpixels with their K-NN neighbours, worst
+/// first; a seed's neighbours are covered by its run and seed no run of their own, so runs
+/// spread over the image. Each new hypothesis is evaluated on the seed's neighbours and theirs.
+fn add_local_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams, rng: &mut Rng) {
+    let n = fit.samples.len();
+    let mut order: Vec<usize> = (0..n).filter(|&i| fit.samples[i].len() >= 8).collect();
+    let best: Vec<f32> = (0..n).map(|i| fit.best(i)).collect();
+    order.sort_by(|&a, &b| best[b].total_cmp(&best[a]).then(a.cmp(&b)));
     let mut runs = 0;
-    for i in order {
-        if runs >= params.max_local_hypotheses || best(cost, i) < params.explain_px {
+    let mut mark = vec![false; n];
+    let mut covered = vec![false; n];
+    for seed in order {
+        if runs >= params.max_local_hypotheses
+            || covered[seed]
+            || (fit.best(seed) as f64) < params.explain_px
+        {
             continue;
         }
         runs += 1;
-        let mut points = samples[i].clone();
-        for &(n, _) in &knn.neighbours[i] {
-            points.extend_from_slice(&samples[n as usize]);
-        }
-        if let Some((motion, _)) =
-            robust_motion(&points, focal, params.local_iterations, 8.0, 1.0, rng)
-        {
-            cost.push(
-                samples
-                    .iter()
-                    .map(|s| mean_error(&motion, s, focal))
-                    .collect(),
-            );
-            hypotheses.push(motion);
-        }
-    }
-}
-
-/// Support-ordered assignment followed by ICM with a Potts term over touching superpixels.
-fn assign(cost: &[Vec<f64>], adjacency: &[Vec<u32>], params: &InitParams) -> Vec<usize> {
-    let n = adjacency.len();
-    let support: Vec<usize> = cost
-        .iter()
-        .map(|c| c.iter().filter(|&&e| e < params.explain_px).count())
-        .collect();
-    let mut by_support: Vec<usize> = (0..cost.len()).collect();
-    by_support.sort_by(|&a, &b| support[b].cmp(&support[a]).then(a.cmp(&b)));
-    let argmin = |i: usize| {
-        (0..cost.len())
-            .min_by(|&a, &b| cost[a][i].total_cmp(&cost[b][i]))
-            .unwrap_or(0)
-    };
-    let mut label: Vec<usize> = (0..n)
-        .map(|i| {
-            by_support
-                .iter()
-                .copied()
-                .find(|&h| cost[h][i] < params.explain_px)
-                .unwrap_or_else(|| argmin(i))
-        })
-        .collect();
-    for _ in 0..4 {
-        let mut changed = false;
-        for i in 0..n {
-            let energy = |h: usize, label: &[usize]| {
-                cost[h][i]
-                    + params.smoothness_px
-                        * adjacency[i]
-                            .iter()
-                            .filter(|&&k| label[k as usize] != h)
-                            .count() as f64
-            };
-            let mut candidates: Vec<usize> =
-                adjacency[i].iter().map(|&k| label[k as usize]).collect();
-            candidates.push(argmin(i));
-            let current = energy(label[i], &label);
-            if let Some((h, e)) = candidates
-                .into_iter()
-                .map(|h| (h, energy(h, &label)))
-                .min_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)))
-                && e < current - 1e-9
-            {
-                label[i] = h;
-                changed = true;
+        covered[seed] = true;
+        knn.neighbours[seed]
+            .iter()
+            .for_each(|&(k, _)| covered[k as usize] = true);
+        // Every third sample of the seed and its neighbours: enough points, a third of the work.
+        let points: Vec<Correspondence> = std::iter::once(seed)
+            .chain(knn.neighbours[seed].iter().map(|&(k, _)| k as usize))
+            .flat_map(|i| fit.samples[i].iter().step_by(3).copied())
+            .collect();
+        let Some((motion, _)) = robust_motion(
+            &points,
+            fit.focal,
+            params.local_iterations,
+            2.0,
+            1.0,
+            MinimalSolver::FivePoint,
+            rng,
+        ) else {
+            continue;
+        };
+        let mut near = vec![seed];
+        mark[seed] = true;
+        for &(k, _) in &knn.neighbours[seed] {
+            for j in std::iter::once(k).chain(knn.neighbours[k as usize].iter().map(|e| e.0)) {
+                if !mark[j as usize] {
+                    mark[j as usize] = true;
+                    near.push(j as usize);
+                }
             }
         }
-        if !changed {
-            break;
-        }
-    }
-    label
-}
-
-/// Refits each used hypothesis on the correspondences of its superpixels (inliers at 1.5 px).
-fn refit(
-    samples: &[Vec<Correspondence>],
-    assignment: &mut [usize],
-    hypotheses: &mut [Motion],
-    focal: f64,
-) {
-    let loose = (1.5 / focal) * (1.5 / focal);
-    for (h, motion) in hypotheses.iter_mut().enumerate() {
-        let e = motion.essential();
-        let points: Vec<Correspondence> = assignment
-            .iter()
-            .enumerate()
-            .filter(|&(_, &a)| a == h)
-            .flat_map(|(i, _)| samples[i].iter().copied())
-            .filter(|c| sampson(&e, c) < loose)
-            .collect();
-        if points.len() < 40 {
-            continue;
-        }
-        if let Some(better) = eight_point(&points).and_then(|e| decompose(&e, &points))
-            && mean_error(&better, &points, focal) <= mean_error(motion, &points, focal)
-        {
-            *motion = better;
-        }
+        near.iter().for_each(|&j| mark[j] = false);
+        fit.add(motion, Some(&near));
     }
 }
 
-/// The plane of every superpixel under its assigned motion.
+/// The plane of every superpixel under its assigned motion, from up to 150 of its pixels.
 fn fit_planes(
     sp: &Superpixels,
     flow: &FlowField,
@@ -353,24 +441,15 @@ fn fit_planes(
     k: &Intrinsics,
     hypotheses: &[Motion],
     assignment: &[usize],
+    params: &InitParams,
 ) -> Vec<Piece> {
-    let w = flow.width();
-    sp.segments
+    let focal = (k.fx * k.fy).sqrt();
+    sample_correspondences(sp, flow, reliable, k, 150)
         .iter()
         .zip(assignment)
-        .map(|(seg, &h)| {
+        .map(|(points, &h)| {
             let motion = hypotheses[h];
-            let good: Vec<Correspondence> = seg
-                .pixels
-                .iter()
-                .filter(|&&p| reliable.data()[p as usize] && is_known(flow.data()[p as usize]))
-                .map(|&p| {
-                    correspondence(p as usize % w, p as usize / w, flow.data()[p as usize], k)
-                })
-                .collect();
-            let step = good.len().div_ceil(150).max(1);
-            let points: Vec<Correspondence> = good.into_iter().step_by(step).collect();
-            let (m, degenerate) = match plane(&points, &motion) {
+            let (m, degenerate) = match fit_plane(points, &motion, focal, params.min_parallax_px) {
                 Ok(m) => (m, None),
                 Err(d) => (Vector3::zeros(), Some(d)),
             };
@@ -386,53 +465,8 @@ fn fit_planes(
         .collect()
 }
 
-/// The plane m (mᵀX = 1) through the correspondences under `motion`, by IRLS with Cauchy weights.
-pub fn plane(
-    points: &[Correspondence],
-    motion: &Motion,
-) -> std::result::Result<Vector3<f64>, Degeneracy> {
-    if points.len() < 8 {
-        return Err(Degeneracy::TooFewPixels);
-    }
-    let rows: Vec<(Matrix3<f64>, Vector3<f64>)> = points
-        .iter()
-        .map(|c| {
-            let s = skew(&c.x2);
-            (s * motion.t * c.x1.transpose(), -(s * motion.r * c.x1))
-        })
-        .collect();
-    let mut weights = vec![1.0; rows.len()];
-    let mut m = Vector3::zeros();
-    for _ in 0..5 {
-        let (mut ata, mut atb) = (Matrix3::zeros(), Vector3::zeros());
-        for ((a, b), w) in rows.iter().zip(&weights) {
-            ata += a.transpose() * a * *w;
-            atb += a.transpose() * b * *w;
-        }
-        let eig = ata.symmetric_eigenvalues();
-        let (lo, hi) = (eig.min(), eig.max());
-        if hi.is_nan() || hi <= 0.0 || lo < 1e-9 * hi {
-            return Err(Degeneracy::NoParallax);
-        }
-        m = ata.try_inverse().ok_or(Degeneracy::NoParallax)? * atb;
-        let residuals: Vec<f64> = rows.iter().map(|(a, b)| (a * m - b).norm()).collect();
-        let mut sorted = residuals.clone();
-        sorted.sort_by(f64::total_cmp);
-        let sigma = (1.4826 * sorted[sorted.len() / 2]).max(1e-9) * 2.0;
-        weights = residuals
-            .iter()
-            .map(|r| 1.0 / (1.0 + (r / sigma).powi(2)))
-            .collect();
-    }
-    let behind = points.iter().filter(|c| m.dot(&c.x1) <= 0.0).count();
-    if behind * 4 > points.len() {
-        return Err(Degeneracy::NegativeDepth);
-    }
-    Ok(m)
-}
-
-/// Gives every degenerate piece the plane and motion of a touching valid piece (the one sharing
-/// the most boundary, found by breadth-first growth from valid pieces).
+/// Gives every degenerate piece the plane and motion of a touching valid piece, growing
+/// breadth-first from the valid pieces.
 fn fill_degenerate(mut pieces: Vec<Piece>, adjacency: &[Vec<u32>]) -> Vec<Piece> {
     let mut filled: Vec<bool> = pieces.iter().map(|p| p.degenerate.is_none()).collect();
     if !filled.iter().any(|&f| f) {

@@ -9,7 +9,9 @@
 //! The later refinement step (particle BP, eq. 3–6) will take a [`Soup`] and return a refined one.
 
 pub mod arap;
+pub mod graphcut;
 pub mod init;
+pub mod plane;
 
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;

@@ -12,6 +12,7 @@ use superpixel_soup::grid::Grid;
 use superpixel_soup::image::{ExifInfo, LoadedImage};
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
 use superpixel_soup::output::depth_at;
+use superpixel_soup::soup::arap::scale_energy;
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
 
 /// Run the reconstruction on cases in the evaluation layout and score the depth.
@@ -32,6 +33,10 @@ pub struct Args {
     /// Neighbours in the K-NN graph.
     #[arg(long, default_value_t = 15)]
     k: usize,
+    /// Also print, per motion hypothesis in use, its superpixels, the ground-truth motion group
+    /// most of its pixels belong to (and that share) and the error of its solved scale.
+    #[arg(long)]
+    groups: bool,
 }
 
 /// Numbers for one case.
@@ -61,7 +66,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut results = Vec::new();
     for dir in &args.cases {
         let case = read_case(dir)?;
-        let result = evaluate(&case, &params, args.gt_flow)?;
+        let (result, rec) = evaluate(&case, &params, args.gt_flow)?;
         println!(
             "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {} | {} | {:.2} |",
             result.case,
@@ -77,6 +82,9 @@ pub fn run(args: Args) -> Result<()> {
             result.seconds
         );
         results.push(result);
+        if args.groups {
+            print_groups(&rec, &case);
+        }
     }
     if let Some(path) = &args.json {
         let text = serde_json::to_string_pretty(&results)
@@ -86,7 +94,7 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn evaluate(case: &Case, params: &Params, gt_flow: bool) -> Result<CaseResult> {
+fn evaluate(case: &Case, params: &Params, gt_flow: bool) -> Result<(CaseResult, Reconstruction)> {
     let gt = case.depth1.as_ref().ok_or_else(|| {
         Error::InvalidParameter(format!(
             "case {} has no depth1.pfm to score against",
@@ -122,7 +130,7 @@ fn evaluate(case: &Case, params: &Params, gt_flow: bool) -> Result<CaseResult> {
     let seconds = start.elapsed().as_secs_f64();
     let metrics = depth_metrics(gt, &rec.depth_input)?;
     let (oracle_superpixel_mre, oracle_group_mre) = oracles(&rec, case, gt, &camera.intrinsics);
-    Ok(CaseResult {
+    let result = CaseResult {
         case: case.name.clone(),
         metrics,
         oracle_superpixel_mre,
@@ -132,7 +140,117 @@ fn evaluate(case: &Case, params: &Params, gt_flow: bool) -> Result<CaseResult> {
         degenerate: rec.report.degenerate,
         energy_start: rec.report.arap.energy_start,
         energy_end: rec.report.arap.energy_end,
-    })
+    };
+    Ok((result, rec))
+}
+
+/// Per motion hypothesis in use: superpixels, pixels, the ground-truth group holding most of its
+/// pixels and that share (purity), and its scale error: the solved λ (after the global median
+/// alignment) over the oracle scale median(z_gt / z) of its own pixels, minus 1.
+fn print_groups(rec: &Reconstruction, case: &Case) {
+    let Some(gt) = case.depth1.as_ref() else {
+        return;
+    };
+    let labels = &rec.superpixels.labels;
+    if gt.size() != labels.size() {
+        println!("(--groups needs the case at the working resolution)");
+        return;
+    }
+    let hyps = rec.soup.hypotheses.len();
+    let mut ratios = vec![Vec::new(); hyps];
+    let mut pieces = vec![0usize; hyps];
+    let mut gt_groups = vec![[0usize; 256]; hyps];
+    for p in &rec.soup.pieces {
+        pieces[p.hypothesis] += 1;
+    }
+    let mut all = Vec::new();
+    for (i, (&l, &g)) in labels.data().iter().zip(gt.data()).enumerate() {
+        let z = rec.depth.data()[i];
+        let h = rec.soup.pieces[l as usize].hypothesis;
+        if let Some(groups) = &case.groups1 {
+            gt_groups[h][groups.data()[i] as usize] += 1;
+        }
+        if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
+            ratios[h].push(g as f64 / z as f64);
+            all.push(g as f64 / z as f64);
+        }
+    }
+    if all.is_empty() {
+        return;
+    }
+    let global = median(all);
+    // The energy of the scale solve at its solution and at oracle scales (one per hypothesis):
+    // oracle lower than solved means the solver missed; higher means the energy is wrong there.
+    let mut oracle_soup = rec.unit_soup.clone();
+    let mut unit_ratios = vec![Vec::new(); hyps];
+    for (i, (&l, &g)) in labels.data().iter().zip(gt.data()).enumerate() {
+        let piece = &rec.unit_soup.pieces[l as usize];
+        let (x, y) = ((i % labels.width()) as f64, (i / labels.width()) as f64);
+        let z = piece.depth(&nalgebra::Vector3::from(
+            rec.report.camera.intrinsics.ray(x, y),
+        ));
+        if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
+            unit_ratios[piece.hypothesis].push(g as f64 / z);
+        }
+    }
+    let oracle: Vec<f64> = unit_ratios
+        .into_iter()
+        .map(|r| if r.is_empty() { f64::NAN } else { median(r) })
+        .collect();
+    for p in &mut oracle_soup.pieces {
+        p.lambda = if oracle[p.hypothesis].is_finite() {
+            oracle[p.hypothesis]
+        } else {
+            1.0
+        };
+    }
+    let energy = |soup: &superpixel_soup::soup::Soup| {
+        scale_energy(
+            soup,
+            &rec.superpixels,
+            &rec.knn,
+            &rec.boundaries,
+            &rec.flow,
+            &rec.report.camera.intrinsics,
+            &rec.report.params.scales,
+        )
+    };
+    println!(
+        "scale energy: solved {:.3}, oracle scales {:.3}",
+        energy(&rec.soup),
+        energy(&oracle_soup)
+    );
+    println!("| hypothesis | superpixels | pixels | main GT group | purity | scale error |");
+    println!("| --- | --- | --- | --- | --- | --- |");
+    for h in 0..hyps {
+        if pieces[h] == 0 || ratios[h].is_empty() {
+            continue;
+        }
+        let count = ratios[h].len();
+        let (main, share) = gt_groups[h]
+            .iter()
+            .enumerate()
+            .max_by_key(|&(g, &c)| (c, std::cmp::Reverse(g)))
+            .map(|(g, &c)| {
+                (
+                    g,
+                    c as f64 / gt_groups[h].iter().sum::<usize>().max(1) as f64,
+                )
+            })
+            .unwrap_or((0, 0.0));
+        let oracle = median(ratios[h].clone());
+        println!(
+            "| {h} | {} | {count} | {} | {:.2} | {:+.3} |",
+            pieces[h],
+            if case.groups1.is_some() {
+                main.to_string()
+            } else {
+                "–".into()
+            },
+            share,
+            global / oracle - 1.0
+        );
+    }
 }
 
 /// MRE of the unit-scale soup with oracle scales: per superpixel (median z_gt / z over its
