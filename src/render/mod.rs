@@ -18,4 +18,6 @@ pub mod cloud;
 pub mod colour;
 pub mod controls;
 pub mod decimate;
+#[cfg(target_arch = "wasm32")]
+pub mod gpu;
 pub mod view;

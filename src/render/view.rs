@@ -69,6 +69,8 @@ pub struct View {
     colours_version: u64,
     bounds: Bounds,
     camera: Camera,
+    /// The last home view; while the camera is still there, a new aspect ratio re-frames it.
+    home: Camera,
     controls: Controls,
     fov_y: f32,
     viewport: Viewport,
@@ -102,6 +104,7 @@ impl View {
             colours_version: 0,
             bounds: Bounds::of_points(&[]),
             camera: Camera::home(&[], DEFAULT_FOV_Y, 1.0),
+            home: Camera::home(&[], DEFAULT_FOV_Y, 1.0),
             controls: Controls::default(),
             fov_y: DEFAULT_FOV_Y,
             viewport,
@@ -205,12 +208,18 @@ impl View {
     }
 
     /// The drawing buffer is `width_px` × `height_px` pixels with `pixel_ratio` pixels per CSS
-    /// pixel.
+    /// pixel. While the user has not moved the camera from the home view, a new aspect ratio
+    /// re-frames the home view.
     pub fn set_viewport(&mut self, width_px: u32, height_px: u32, pixel_ratio: f32) {
-        self.viewport = Viewport {
+        let viewport = Viewport {
             width: width_px.max(1) as f32,
             height: height_px.max(1) as f32,
         };
+        let aspect_changed = viewport.aspect() != self.viewport.aspect();
+        self.viewport = viewport;
+        if aspect_changed && self.camera == self.home {
+            self.reset_view();
+        }
         self.pixel_ratio = if pixel_ratio.is_finite() && pixel_ratio > 0.0 {
             pixel_ratio
         } else {
@@ -223,7 +232,8 @@ impl View {
         let mut framed: Vec<[f32; 3]> = Vec::with_capacity(2 * self.shown.len());
         framed.extend(self.shown.iter().map(|&i| self.cloud.pos1()[i as usize]));
         framed.extend(self.shown.iter().map(|&i| self.cloud.pos2()[i as usize]));
-        self.camera = Camera::home(&framed, self.fov_y, self.viewport.aspect());
+        self.home = Camera::home(&framed, self.fov_y, self.viewport.aspect());
+        self.camera = self.home;
     }
 
     /// A pointer went down at (`x`, `y`) CSS pixels from the canvas's top left; `drag` is what
@@ -425,6 +435,26 @@ mod tests {
         view.set_cloud(two_point_cloud(None));
         assert_eq!(view.colour_mode(), ColourMode::Rgb);
         assert_eq!(view.colours().0[0], [255, 0, 0, 255]);
+    }
+
+    #[test]
+    fn a_new_aspect_reframes_the_home_view_until_the_user_moves() {
+        let mut view = View::default();
+        view.set_field_of_view(30.0).unwrap();
+        view.set_viewport(400, 400, 1.0);
+        // A cloud wider than the square view at camera 1: the home view backs off.
+        let cloud = PointCloud::new(&[-3.0, 0.0, 5.0, 3.0, 0.0, 5.0], None, &[0; 6], None).unwrap();
+        view.set_cloud(cloud);
+        let square = view.camera().distance;
+        view.set_viewport(1600, 400, 1.0);
+        assert!(
+            view.camera().distance < square,
+            "a wider view needs less distance"
+        );
+        view.wheel(50.0);
+        let moved = *view.camera();
+        view.set_viewport(400, 400, 1.0);
+        assert_eq!(*view.camera(), moved);
     }
 
     #[test]
