@@ -1,6 +1,6 @@
 //! Everything the viewer shows and how, independent of the GPU: the cloud and the subset of it
 //! that is drawn, the point colours, the camera and its gestures, and the display settings.
-//! The GPU part ([`super::gpu`], wasm only) uploads what this produces: the packed instance
+//! The GPU part ([`super::gpu`], wasm only) uploads what this produces: the packed point
 //! buffers when their version changes, and the [`Uniforms`] every frame.
 
 use crate::error::{Error, Result};
@@ -61,8 +61,8 @@ pub struct View {
     shown: Vec<u32>,
     budget: usize,
     colour_mode: ColourMode,
-    /// Per shown point: x, y, z in frame 1 then x, y, z in frame 2.
-    positions: Vec<f32>,
+    /// Per shown point: (x, y, z, 1) in frame 1 then (x, y, z, 1) in frame 2.
+    positions: Vec<[f32; 4]>,
     /// Per shown point: RGBA in frame 1 then RGBA in frame 2.
     colours: Vec<[u8; 4]>,
     positions_version: u64,
@@ -282,9 +282,9 @@ impl View {
         self.cloud.len()
     }
 
-    /// Packed positions of the drawn points (6 floats each: X then X'), and their version
-    /// (it changes whenever they do).
-    pub fn positions(&self) -> (&[f32], u64) {
+    /// Packed positions of the drawn points (two RGBA32F texels each: X then X', w = 1), and
+    /// their version (it changes whenever they do).
+    pub fn positions(&self) -> (&[[f32; 4]], u64) {
         (&self.positions, self.positions_version)
     }
 
@@ -329,10 +329,13 @@ impl View {
     /// Re-selects the drawn points under the budget and repacks positions and colours.
     fn select_points(&mut self) {
         self.shown = decimate(self.cloud.len(), self.budget);
-        self.positions = Vec::with_capacity(self.shown.len() * 6);
+        let homogeneous = |[x, y, z]: [f32; 3]| [x, y, z, 1.0];
+        self.positions = Vec::with_capacity(self.shown.len() * 2);
         for &i in &self.shown {
-            self.positions.extend(self.cloud.pos1()[i as usize]);
-            self.positions.extend(self.cloud.pos2()[i as usize]);
+            self.positions
+                .push(homogeneous(self.cloud.pos1()[i as usize]));
+            self.positions
+                .push(homogeneous(self.cloud.pos2()[i as usize]));
         }
         self.positions_version += 1;
         // The mode was valid for the cloud (set_cloud falls back to RGB without labels).
@@ -382,7 +385,12 @@ mod tests {
         let (positions, version) = view.positions();
         assert_eq!(
             positions,
-            &[0.0, 0.0, 4.0, 0.5, 0.0, 4.0, 1.0, 0.5, 6.0, 1.0, 0.5, 6.0]
+            &[
+                [0.0, 0.0, 4.0, 1.0],
+                [0.5, 0.0, 4.0, 1.0],
+                [1.0, 0.5, 6.0, 1.0],
+                [1.0, 0.5, 6.0, 1.0]
+            ]
         );
         assert!(version > 0);
         assert_eq!(view.colours().0.len(), 4);
@@ -403,7 +411,7 @@ mod tests {
         let (_, before) = view.positions();
         view.set_point_budget(400);
         assert_eq!(view.shown_len(), 400);
-        assert_eq!(view.positions().0.len(), 400 * 6);
+        assert_eq!(view.positions().0.len(), 400 * 2);
         assert_eq!(view.colours().0.len(), 400 * 2);
         assert!(view.positions().1 > before);
     }
