@@ -20,8 +20,8 @@ after(async () => {
 });
 
 /** Opens viewer.html with `query` and waits until it is ready or failed. */
-async function open(query, { init } = {}) {
-  const page = await browser.newPage({ viewport: { width: 900, height: 800 } });
+async function open(query, { init, deviceScaleFactor = 1 } = {}) {
+  const page = await browser.newPage({ viewport: { width: 900, height: 800 }, deviceScaleFactor });
   const errors = [];
   page.on('pageerror', (err) => errors.push(err.message));
   page.on('console', (msg) => msg.type() === 'error' && errors.push(msg.text()));
@@ -127,6 +127,30 @@ for (const [query, backend, label] of [
     }
   });
 }
+
+test('the drawing buffer follows the canvas size and the device pixel ratio', async () => {
+  const { page, errors } = await open('?points=30000', { deviceScaleFactor: 2 });
+  const size = () =>
+    page.evaluate(() => {
+      const c = document.getElementById('view');
+      return { width: c.width, height: c.height, css: [c.clientWidth, c.clientHeight] };
+    });
+  try {
+    await page.waitForFunction(() => document.getElementById('view').width > 300);
+    let s = await size();
+    assert.deepEqual([s.width, s.height], [2 * s.css[0], 2 * s.css[1]]);
+    await page.setViewportSize({ width: 500, height: 800 });
+    await page.waitForFunction((w) => document.getElementById('view').width !== w, s.width);
+    s = await size();
+    assert.deepEqual([s.width, s.height], [2 * s.css[0], 2 * s.css[1]]);
+    assert.ok(s.css[0] < 500, `canvas ${s.css[0]} CSS px wide in a 500 px window`);
+    const drawn = await analyse(page);
+    assert.equal(drawn.width, s.width, 'the screenshot has the drawing buffer size');
+    assert.deepEqual(errors, []);
+  } finally {
+    await page.close();
+  }
+});
 
 test('viewer page explains when neither WebGPU nor WebGL2 works', async () => {
   const { page } = await open('', {
