@@ -333,7 +333,7 @@ impl Viewer {
     }
 
     /// The current view as PNG bytes (RGB, the drawing buffer's size), rendered off screen.
-    #[wasm_bindgen(js_name = screenshot)]
+    #[wasm_bindgen(js_name = screenshot, unchecked_return_type = "Promise<Uint8Array>")]
     pub fn screenshot(&self) -> js_sys::Promise {
         let pending = {
             let mut inner = self.inner.borrow_mut();
@@ -349,6 +349,7 @@ impl Viewer {
     }
 
     /// Resolves once the GPU has finished everything drawn so far (for timing).
+    #[wasm_bindgen(unchecked_return_type = "Promise<void>")]
     pub fn finish(&self) -> js_sys::Promise {
         let pending = self.inner.borrow().gpu.finish();
         wasm_bindgen_futures::future_to_promise(async move {
@@ -365,16 +366,6 @@ impl Viewer {
         change(&mut inner.view)?;
         inner.request_frame();
         Ok(())
-    }
-
-    /// The view state (for tests and other Rust callers).
-    pub fn with_view<T>(&self, f: impl FnOnce(&View) -> T) -> T {
-        f(&self.inner.borrow().view)
-    }
-
-    /// The canvas's format (for tests).
-    pub fn surface_format(&self) -> String {
-        format!("{:?}", self.inner.borrow().gpu.surface_format())
     }
 
     /// Redraws when the canvas's displayed size changes.

@@ -115,11 +115,6 @@ impl Gpu {
         &self.adapter_name
     }
 
-    /// The canvas format (for tests and diagnostics).
-    pub fn surface_format(&self) -> wgpu::TextureFormat {
-        self.config.format
-    }
-
     /// Largest width or height of the drawing buffer this device can render.
     pub fn max_size(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d
