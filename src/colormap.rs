@@ -39,31 +39,44 @@ pub fn turbo(t: f32) -> [u8; 3] {
     ]
 }
 
-/// A picture of a depth map: near is warm (red), far is cool (blue), on inverse depth so that
-/// near structure gets most of the colour range; unknown depth (NaN, ≤ 0) is black. The range is
-/// the 2nd–98th percentile of the valid inverse depths, so a few outliers do not wash it out.
-pub fn depth_picture(depth: &Grid<f32>) -> Frame {
-    let mut inverse: Vec<f32> = depth
-        .data()
-        .iter()
-        .filter(|z| z.is_finite() && **z > 0.0)
+/// The range of inverse depth that depth colours span: the 2nd–98th percentile of the valid
+/// (finite, positive) depths' inverses, so a few outliers do not wash it out; `None` when no
+/// depth is valid.
+pub fn inverse_depth_range(depths: impl IntoIterator<Item = f32>) -> Option<(f32, f32)> {
+    let mut inverse: Vec<f32> = depths
+        .into_iter()
+        .filter(|z| z.is_finite() && *z > 0.0)
         .map(|z| 1.0 / z)
         .collect();
     if inverse.is_empty() {
-        return depth.map(|_| [0, 0, 0]);
+        return None;
     }
     inverse.sort_by(f32::total_cmp);
     let lo = inverse[inverse.len() * 2 / 100];
     let hi = inverse[(inverse.len() * 98 / 100).min(inverse.len() - 1)];
-    let span = (hi - lo).max(f32::EPSILON);
-    depth.map(|&z| {
-        if z.is_finite() && z > 0.0 {
-            // Skip Turbo's near-black ends so that far stays blue, distinct from unknown.
-            turbo(0.08 + 0.87 * (1.0 / z - lo) / span)
-        } else {
-            [0, 0, 0]
-        }
-    })
+    Some((lo, hi))
+}
+
+/// Colour of depth `z` for the inverse-depth `range` of [`inverse_depth_range`]: near is warm
+/// (red), far is cool (blue); unknown depth (NaN, ≤ 0) is black.
+pub fn depth_colour(z: f32, (lo, hi): (f32, f32)) -> [u8; 3] {
+    if z.is_finite() && z > 0.0 {
+        let span = (hi - lo).max(f32::EPSILON);
+        // Skip Turbo's near-black ends so that far stays blue, distinct from unknown.
+        turbo(0.08 + 0.87 * (1.0 / z - lo) / span)
+    } else {
+        [0, 0, 0]
+    }
+}
+
+/// A picture of a depth map: near is warm (red), far is cool (blue), on inverse depth so that
+/// near structure gets most of the colour range; unknown depth (NaN, ≤ 0) is black. The range is
+/// [`inverse_depth_range`] of the map.
+pub fn depth_picture(depth: &Grid<f32>) -> Frame {
+    match inverse_depth_range(depth.data().iter().copied()) {
+        Some(range) => depth.map(|&z| depth_colour(z, range)),
+        None => depth.map(|_| [0, 0, 0]),
+    }
 }
 
 #[cfg(test)]

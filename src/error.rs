@@ -45,6 +45,10 @@ pub enum Error {
     /// A parameter is out of its valid range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
+    /// The browser's graphics (WebGPU / WebGL2) cannot do what the 3D view needs; the message
+    /// says what was tried.
+    #[error("{0}")]
+    Graphics(String),
 }
 
 /// Shorthand for results with the crate's [`Error`].

@@ -18,6 +18,7 @@ pub mod image;
 pub mod input;
 pub mod output;
 pub mod pipeline;
+pub mod render;
 pub mod rng;
 pub mod soup;
 pub mod superpixels;

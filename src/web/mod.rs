@@ -6,6 +6,8 @@
 
 use wasm_bindgen::prelude::*;
 
+pub mod viewer;
+
 /// Runs once when the module is instantiated: Rust panics then reach the browser console as
 /// readable messages instead of a bare `unreachable` trap.
 #[wasm_bindgen(start)]

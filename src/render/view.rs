@@ -1,0 +1,482 @@
+//! Everything the viewer shows and how, independent of the GPU: the cloud and the subset of it
+//! that is drawn, the point colours, the camera and its gestures, and the display settings.
+//! The GPU part ([`super::gpu`], wasm only) uploads what this produces: the packed point
+//! buffers when their version changes, and the [`Uniforms`] every frame.
+
+use crate::error::{Error, Result};
+
+use super::camera::{Bounds, Camera, DEFAULT_FOV_Y, Viewport};
+use super::cloud::PointCloud;
+use super::colour::{ColourMode, point_colours};
+use super::controls::{Controls, Drag};
+use super::decimate::{DESKTOP_POINT_BUDGET, decimate};
+
+/// Default point size in CSS pixels.
+pub const DEFAULT_POINT_SIZE: f32 = 2.0;
+
+/// Largest point size in CSS pixels.
+pub const MAX_POINT_SIZE: f32 = 64.0;
+
+/// Default background: the page's dark header colour.
+pub const DEFAULT_BACKGROUND: [u8; 3] = [0x1d, 0x23, 0x30];
+
+/// The per-frame shader parameters, laid out as the WGSL `Uniforms` struct of `points.wgsl`
+/// (80 bytes).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Uniforms {
+    /// World → clip space, column-major.
+    pub view_projection: [f32; 16],
+    /// Drawing-buffer size in pixels.
+    pub viewport_px: [f32; 2],
+    /// Point side length in drawing-buffer pixels.
+    pub point_size_px: f32,
+    /// Morph parameter t: points are drawn at X + t·(X' − X).
+    pub morph: f32,
+}
+
+impl Uniforms {
+    /// Size of the uniform block in bytes.
+    pub const SIZE: usize = 80;
+
+    /// The little-endian bytes of the uniform block, as the shader reads them.
+    pub fn to_bytes(&self) -> [u8; Self::SIZE] {
+        let mut out = [0u8; Self::SIZE];
+        let values = self
+            .view_projection
+            .iter()
+            .chain(&self.viewport_px)
+            .chain([&self.point_size_px, &self.morph]);
+        for (chunk, v) in out.chunks_exact_mut(4).zip(values) {
+            chunk.copy_from_slice(&v.to_le_bytes());
+        }
+        out
+    }
+}
+
+/// The viewer's state. All lengths on screen are in CSS pixels except where a name says `_px`
+/// (drawing-buffer pixels = CSS pixels × device pixel ratio).
+#[derive(Clone, Debug)]
+pub struct View {
+    cloud: PointCloud,
+    shown: Vec<u32>,
+    budget: usize,
+    colour_mode: ColourMode,
+    /// Per shown point: (x, y, z, 1) in frame 1 then (x, y, z, 1) in frame 2.
+    positions: Vec<[f32; 4]>,
+    /// Per shown point: RGBA in frame 1 then RGBA in frame 2.
+    colours: Vec<[u8; 4]>,
+    positions_version: u64,
+    colours_version: u64,
+    bounds: Bounds,
+    camera: Camera,
+    /// The last home view; while the camera is still there, a new aspect ratio re-frames it.
+    home: Camera,
+    controls: Controls,
+    fov_y: f32,
+    viewport: Viewport,
+    pixel_ratio: f32,
+    point_size: f32,
+    morph: f32,
+    background: [u8; 3],
+}
+
+impl Default for View {
+    fn default() -> Self {
+        View::new(DESKTOP_POINT_BUDGET)
+    }
+}
+
+impl View {
+    /// An empty view that draws at most `budget` points.
+    pub fn new(budget: usize) -> View {
+        let viewport = Viewport {
+            width: 1.0,
+            height: 1.0,
+        };
+        let mut view = View {
+            cloud: PointCloud::default(),
+            shown: Vec::new(),
+            budget: budget.max(1),
+            colour_mode: ColourMode::Rgb,
+            positions: Vec::new(),
+            colours: Vec::new(),
+            positions_version: 0,
+            colours_version: 0,
+            bounds: Bounds::of_points(&[]),
+            camera: Camera::home(&[], DEFAULT_FOV_Y, 1.0),
+            home: Camera::home(&[], DEFAULT_FOV_Y, 1.0),
+            controls: Controls::default(),
+            fov_y: DEFAULT_FOV_Y,
+            viewport,
+            pixel_ratio: 1.0,
+            point_size: DEFAULT_POINT_SIZE,
+            morph: 0.0,
+            background: DEFAULT_BACKGROUND,
+        };
+        view.reset_view();
+        view
+    }
+
+    /// Shows `cloud` from the home view. A superpixel colour mode falls back to RGB when the new
+    /// cloud has no labels.
+    pub fn set_cloud(&mut self, cloud: PointCloud) {
+        self.cloud = cloud;
+        if self.colour_mode == ColourMode::Superpixel && self.cloud.labels().is_none() {
+            self.colour_mode = ColourMode::Rgb;
+        }
+        self.select_points();
+        let both_frames: Vec<[f32; 3]> = self
+            .cloud
+            .pos1()
+            .iter()
+            .chain(self.cloud.pos2())
+            .copied()
+            .collect();
+        self.bounds = Bounds::of_points(&both_frames);
+        self.reset_view();
+    }
+
+    /// Draws at most `budget` points (at least 1); larger clouds are decimated
+    /// ([`decimate`]).
+    pub fn set_point_budget(&mut self, budget: usize) {
+        let budget = budget.max(1);
+        if budget != self.budget {
+            self.budget = budget;
+            self.select_points();
+        }
+    }
+
+    /// Recolours the points. Fails, leaving the mode unchanged, for superpixel colours on a
+    /// cloud without labels.
+    pub fn set_colour_mode(&mut self, mode: ColourMode) -> Result<()> {
+        self.colours = point_colours(&self.cloud, &self.shown, mode)?;
+        self.colour_mode = mode;
+        self.colours_version += 1;
+        Ok(())
+    }
+
+    /// Morph parameter t in [0, 1]: 0 shows frame 1, 1 shows frame 2, in between the points
+    /// move along straight lines X + t·(X' − X).
+    pub fn set_morph(&mut self, t: f32) -> Result<()> {
+        if !(0.0..=1.0).contains(&t) {
+            return Err(Error::InvalidParameter(format!(
+                "morph must be between 0 (frame 1) and 1 (frame 2), not {t}"
+            )));
+        }
+        self.morph = t;
+        Ok(())
+    }
+
+    /// Shows frame 1 or frame 2 (morph 0 or 1).
+    pub fn set_frame(&mut self, frame: u32) -> Result<()> {
+        match frame {
+            1 => self.set_morph(0.0),
+            2 => self.set_morph(1.0),
+            other => Err(Error::InvalidParameter(format!(
+                "frame must be 1 or 2, not {other}"
+            ))),
+        }
+    }
+
+    /// Point side length in CSS pixels, clamped to [1, [`MAX_POINT_SIZE`]].
+    pub fn set_point_size(&mut self, size: f32) -> Result<()> {
+        if !size.is_finite() || size <= 0.0 {
+            return Err(Error::InvalidParameter(format!(
+                "point size must be a positive number of pixels, not {size}"
+            )));
+        }
+        self.point_size = size.clamp(1.0, MAX_POINT_SIZE);
+        Ok(())
+    }
+
+    /// Vertical field of view in degrees (in (0, 180)), e.g. 2·atan(H / (2·fy)) for a photo of
+    /// height H pixels taken with focal length fy pixels, so that the home view matches camera 1.
+    /// Takes effect at the next [`View::reset_view`].
+    pub fn set_field_of_view(&mut self, degrees: f32) -> Result<()> {
+        if !(degrees > 0.0 && degrees < 180.0) {
+            return Err(Error::InvalidParameter(format!(
+                "field of view must be between 0 and 180 degrees, not {degrees}"
+            )));
+        }
+        self.fov_y = degrees.to_radians();
+        Ok(())
+    }
+
+    /// Background colour (sRGB bytes).
+    pub fn set_background(&mut self, rgb: [u8; 3]) {
+        self.background = rgb;
+    }
+
+    /// The drawing buffer is `width_px` × `height_px` pixels with `pixel_ratio` pixels per CSS
+    /// pixel. While the user has not moved the camera from the home view, a new aspect ratio
+    /// re-frames the home view.
+    pub fn set_viewport(&mut self, width_px: u32, height_px: u32, pixel_ratio: f32) {
+        let viewport = Viewport {
+            width: width_px.max(1) as f32,
+            height: height_px.max(1) as f32,
+        };
+        let aspect_changed = viewport.aspect() != self.viewport.aspect();
+        self.viewport = viewport;
+        if aspect_changed && self.camera == self.home {
+            self.reset_view();
+        }
+        self.pixel_ratio = if pixel_ratio.is_finite() && pixel_ratio > 0.0 {
+            pixel_ratio
+        } else {
+            1.0
+        };
+    }
+
+    /// Back to the home view ([`Camera::home`]) for the current field of view and aspect ratio.
+    pub fn reset_view(&mut self) {
+        let mut framed: Vec<[f32; 3]> = Vec::with_capacity(2 * self.shown.len());
+        framed.extend(self.shown.iter().map(|&i| self.cloud.pos1()[i as usize]));
+        framed.extend(self.shown.iter().map(|&i| self.cloud.pos2()[i as usize]));
+        self.home = Camera::home(&framed, self.fov_y, self.viewport.aspect());
+        self.camera = self.home;
+    }
+
+    /// A pointer went down at (`x`, `y`) CSS pixels from the canvas's top left; `drag` is what
+    /// moving it alone does.
+    pub fn pointer_down(&mut self, id: i32, x: f32, y: f32, drag: Drag) {
+        self.controls.pointer_down(id, x, y, drag);
+    }
+
+    /// A pointer moved; returns whether the camera changed.
+    pub fn pointer_move(&mut self, id: i32, x: f32, y: f32) -> bool {
+        let height_css = self.viewport.height / self.pixel_ratio;
+        self.controls
+            .pointer_move(id, x, y, &mut self.camera, height_css, &self.bounds)
+    }
+
+    /// A pointer went up or was cancelled.
+    pub fn pointer_up(&mut self, id: i32) {
+        self.controls.pointer_up(id);
+    }
+
+    /// A wheel turn of `delta_y` CSS pixels (positive zooms out).
+    pub fn wheel(&mut self, delta_y: f32) {
+        self.controls.wheel(delta_y, &mut self.camera, &self.bounds);
+    }
+
+    /// The shader parameters for the current camera, viewport and settings.
+    pub fn uniforms(&self) -> Uniforms {
+        Uniforms {
+            view_projection: self
+                .camera
+                .view_projection(self.viewport, &self.bounds)
+                .to_cols_array(),
+            viewport_px: [self.viewport.width, self.viewport.height],
+            point_size_px: self.point_size * self.pixel_ratio,
+            morph: self.morph,
+        }
+    }
+
+    /// Number of points drawn.
+    pub fn shown_len(&self) -> usize {
+        self.shown.len()
+    }
+
+    /// Number of points in the cloud (before decimation).
+    pub fn cloud_len(&self) -> usize {
+        self.cloud.len()
+    }
+
+    /// Packed positions of the drawn points (two RGBA32F texels each: X then X', w = 1), and
+    /// their version (it changes whenever they do).
+    pub fn positions(&self) -> (&[[f32; 4]], u64) {
+        (&self.positions, self.positions_version)
+    }
+
+    /// Packed colours of the drawn points (frame-1 RGBA then frame-2 RGBA), and their version.
+    pub fn colours(&self) -> (&[[u8; 4]], u64) {
+        (&self.colours, self.colours_version)
+    }
+
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
+    pub fn bounds(&self) -> &Bounds {
+        &self.bounds
+    }
+
+    pub fn viewport(&self) -> Viewport {
+        self.viewport
+    }
+
+    pub fn colour_mode(&self) -> ColourMode {
+        self.colour_mode
+    }
+
+    pub fn morph(&self) -> f32 {
+        self.morph
+    }
+
+    /// Point side length in CSS pixels.
+    pub fn point_size(&self) -> f32 {
+        self.point_size
+    }
+
+    pub fn point_budget(&self) -> usize {
+        self.budget
+    }
+
+    pub fn background(&self) -> [u8; 3] {
+        self.background
+    }
+
+    /// Re-selects the drawn points under the budget and repacks positions and colours.
+    fn select_points(&mut self) {
+        self.shown = decimate(self.cloud.len(), self.budget);
+        let homogeneous = |[x, y, z]: [f32; 3]| [x, y, z, 1.0];
+        self.positions = Vec::with_capacity(self.shown.len() * 2);
+        for &i in &self.shown {
+            self.positions
+                .push(homogeneous(self.cloud.pos1()[i as usize]));
+            self.positions
+                .push(homogeneous(self.cloud.pos2()[i as usize]));
+        }
+        self.positions_version += 1;
+        // The mode was valid for the cloud (set_cloud falls back to RGB without labels).
+        self.colours = point_colours(&self.cloud, &self.shown, self.colour_mode)
+            .unwrap_or_else(|_| vec![[255; 4]; 2 * self.shown.len()]);
+        self.colours_version += 1;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::*;
+
+    fn two_point_cloud(labels: Option<&[u32]>) -> PointCloud {
+        PointCloud::new(
+            &[0.0, 0.0, 4.0, 1.0, 0.5, 6.0],
+            Some(&[0.5, 0.0, 4.0, 1.0, 0.5, 6.0]),
+            &[255, 0, 0, 0, 255, 0],
+            labels,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn uniform_bytes_follow_the_wgsl_layout() {
+        let u = Uniforms {
+            view_projection: std::array::from_fn(|i| i as f32),
+            viewport_px: [640.0, 480.0],
+            point_size_px: 3.0,
+            morph: 0.25,
+        };
+        let bytes = u.to_bytes();
+        let float =
+            |offset: usize| f32::from_le_bytes(bytes[offset..offset + 4].try_into().unwrap());
+        assert_eq!(float(4 * 15), 15.0);
+        assert_eq!((float(64), float(68)), (640.0, 480.0));
+        assert_eq!((float(72), float(76)), (3.0, 0.25));
+    }
+
+    #[test]
+    fn a_new_cloud_is_packed_and_viewed_from_camera_one() {
+        let mut view = View::default();
+        view.set_viewport(800, 600, 2.0);
+        view.set_cloud(two_point_cloud(None));
+        let (positions, version) = view.positions();
+        assert_eq!(
+            positions,
+            &[
+                [0.0, 0.0, 4.0, 1.0],
+                [0.5, 0.0, 4.0, 1.0],
+                [1.0, 0.5, 6.0, 1.0],
+                [1.0, 0.5, 6.0, 1.0]
+            ]
+        );
+        assert!(version > 0);
+        assert_eq!(view.colours().0.len(), 4);
+        assert!(view.camera().eye().abs_diff_eq(Vec3::ZERO, 1e-4));
+        let u = view.uniforms();
+        assert_eq!(u.viewport_px, [800.0, 600.0]);
+        assert_eq!(u.point_size_px, DEFAULT_POINT_SIZE * 2.0);
+    }
+
+    #[test]
+    fn budget_decimates_and_bumps_the_versions() {
+        let n = 1000;
+        let pos: Vec<f32> = (0..n).flat_map(|i| [i as f32, 0.0, 10.0]).collect();
+        let cloud = PointCloud::new(&pos, None, &vec![9; 3 * n], None).unwrap();
+        let mut view = View::new(100);
+        view.set_cloud(cloud);
+        assert_eq!((view.shown_len(), view.cloud_len()), (100, 1000));
+        let (_, before) = view.positions();
+        view.set_point_budget(400);
+        assert_eq!(view.shown_len(), 400);
+        assert_eq!(view.positions().0.len(), 400 * 2);
+        assert_eq!(view.colours().0.len(), 400 * 2);
+        assert!(view.positions().1 > before);
+    }
+
+    #[test]
+    fn settings_are_checked() {
+        let mut view = View::default();
+        view.set_cloud(two_point_cloud(None));
+        assert!(view.set_morph(0.5).is_ok());
+        assert!(view.set_morph(1.5).is_err());
+        assert!(view.set_morph(f32::NAN).is_err());
+        assert_eq!(view.morph(), 0.5);
+        view.set_frame(2).unwrap();
+        assert_eq!(view.morph(), 1.0);
+        assert!(view.set_frame(3).is_err());
+        assert!(view.set_point_size(0.0).is_err());
+        view.set_point_size(500.0).unwrap();
+        assert_eq!(view.point_size(), MAX_POINT_SIZE);
+        assert!(view.set_field_of_view(180.0).is_err());
+        assert!(view.set_colour_mode(ColourMode::Superpixel).is_err());
+        assert_eq!(view.colour_mode(), ColourMode::Rgb);
+    }
+
+    #[test]
+    fn superpixel_mode_falls_back_to_rgb_for_a_cloud_without_labels() {
+        let mut view = View::default();
+        view.set_cloud(two_point_cloud(Some(&[3, 4])));
+        view.set_colour_mode(ColourMode::Superpixel).unwrap();
+        view.set_cloud(two_point_cloud(None));
+        assert_eq!(view.colour_mode(), ColourMode::Rgb);
+        assert_eq!(view.colours().0[0], [255, 0, 0, 255]);
+    }
+
+    #[test]
+    fn a_new_aspect_reframes_the_home_view_until_the_user_moves() {
+        let mut view = View::default();
+        view.set_field_of_view(30.0).unwrap();
+        view.set_viewport(400, 400, 1.0);
+        // A cloud wider than the square view at camera 1: the home view backs off.
+        let cloud = PointCloud::new(&[-3.0, 0.0, 5.0, 3.0, 0.0, 5.0], None, &[0; 6], None).unwrap();
+        view.set_cloud(cloud);
+        let square = view.camera().distance;
+        view.set_viewport(1600, 400, 1.0);
+        assert!(
+            view.camera().distance < square,
+            "a wider view needs less distance"
+        );
+        view.wheel(50.0);
+        let moved = *view.camera();
+        view.set_viewport(400, 400, 1.0);
+        assert_eq!(*view.camera(), moved);
+    }
+
+    #[test]
+    fn gestures_move_the_camera_and_reset_brings_it_home() {
+        let mut view = View::default();
+        view.set_viewport(400, 300, 1.0);
+        view.set_cloud(two_point_cloud(None));
+        let home = *view.camera();
+        view.pointer_down(1, 10.0, 10.0, Drag::Orbit);
+        assert!(view.pointer_move(1, 60.0, 30.0));
+        view.pointer_up(1);
+        view.wheel(120.0);
+        assert_ne!(*view.camera(), home);
+        view.reset_view();
+        assert_eq!(*view.camera(), home);
+    }
+}
