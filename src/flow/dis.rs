@@ -1,0 +1,547 @@
+//! Dense Inverse Search (Kroeger, Timofte, Dai, Van Gool, "Fast Optical Flow using Dense Inverse
+//! Search", ECCV 2016), laid out as OpenCV's `DISOpticalFlow` does it.
+//!
+//! Coarse to fine over a grey pyramid ([`super::pyramid`]); on each level:
+//! 1. a grid of square patches of frame 1 (side `patch_size`, every `patch_stride` pixels) each
+//!    starts from the coarser level's flow at its centre;
+//! 2. two sweeps over the grid (forward raster order, then backward) let each patch adopt a
+//!    neighbour's displacement when that one matches better (spatial propagation), then refine it
+//!    by inverse-compositional Gauss–Newton on mean-normalised patches (the template's gradient
+//!    and Hessian are computed once per patch; each iteration only resamples frame 2);
+//! 3. the patches are blended into a dense field, each pixel averaging the displacements of the
+//!    patches covering it with weight 1 / max(1, |I₂(x + d) − I₁(x)|) (grey levels);
+//! 4. variational refinement ([`super::variational`]) polishes the dense field.
+//!
+//! The finest level computed is `finest_level`; the caller upsamples from there. Flow at a level
+//! is in pixels of that level; pixel centres at integers, u right, v down.
+
+use super::pyramid::{Level, upsample};
+use super::variational::{VariationalParams, refine};
+use crate::error::{Error, Result};
+
+/// Speed/accuracy trade-offs, named as OpenCV's DIS presets.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Preset {
+    /// Stops two levels above full resolution with a sparse patch grid.
+    Fast,
+    /// Stops one level above full resolution (the default).
+    #[default]
+    Medium,
+    /// Runs to full resolution with a dense patch grid.
+    High,
+}
+
+impl Preset {
+    /// Every preset, fastest first.
+    pub const ALL: [Preset; 3] = [Preset::Fast, Preset::Medium, Preset::High];
+
+    /// The name used on the command line: `fast`, `medium` or `high`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Preset::Fast => "fast",
+            Preset::Medium => "medium",
+            Preset::High => "high",
+        }
+    }
+
+    /// The preset called `name`.
+    pub fn from_name(name: &str) -> Result<Self> {
+        Preset::ALL
+            .into_iter()
+            .find(|p| p.name() == name)
+            .ok_or_else(|| {
+                Error::InvalidParameter(format!(
+                    "unknown flow preset {name:?}; choose fast, medium or high"
+                ))
+            })
+    }
+}
+
+/// Parameters of DIS.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct DisParams {
+    /// Side of the square patches, in pixels of each level.
+    pub patch_size: usize,
+    /// Distance between neighbouring patch origins, in pixels.
+    pub patch_stride: usize,
+    /// Finest pyramid level computed (0 = full resolution); the result is upsampled from there.
+    pub finest_level: usize,
+    /// Gauss–Newton iterations per patch and level, shared by the two propagation sweeps.
+    pub iterations: usize,
+    /// Variational refinement run on every level.
+    pub variational: VariationalParams,
+}
+
+impl DisParams {
+    /// The parameters of `preset`.
+    pub fn preset(preset: Preset) -> Self {
+        let variational = VariationalParams::default();
+        let (patch_stride, finest_level, iterations) = match preset {
+            Preset::Fast => (4, 2, 16),
+            Preset::Medium => (3, 1, 25),
+            Preset::High => (2, 0, 32),
+        };
+        DisParams {
+            patch_size: 8,
+            patch_stride,
+            finest_level,
+            iterations,
+            variational,
+        }
+    }
+
+    /// Fails with [`Error::InvalidParameter`] for values the algorithm cannot run with.
+    pub fn validate(&self) -> Result<()> {
+        let bad = |what: String| Err(Error::InvalidParameter(what));
+        if !(2..=32).contains(&self.patch_size) {
+            return bad(format!("patch size {} is outside 2..=32", self.patch_size));
+        }
+        if self.patch_stride == 0 || self.patch_stride > self.patch_size {
+            return bad(format!(
+                "patch stride {} must be between 1 and the patch size {}",
+                self.patch_stride, self.patch_size
+            ));
+        }
+        if self.finest_level > 8 {
+            return bad(format!("finest level {} is above 8", self.finest_level));
+        }
+        self.variational.validate()
+    }
+}
+
+impl Default for DisParams {
+    fn default() -> Self {
+        DisParams::preset(Preset::default())
+    }
+}
+
+/// The pyramid levels `(finest, coarsest)` DIS runs on for a `width × height` image: the finest
+/// is `params.finest_level`, lowered while that level would be smaller than a patch; the coarsest
+/// is as OpenCV chooses it: about log₂(long side / 4 patches), and never so coarse that the short
+/// side holds less than one patch. `None` when even level 0 is smaller than a patch.
+pub fn levels(width: usize, height: usize, params: &DisParams) -> Option<(usize, usize)> {
+    let ps = params.patch_size;
+    if width.min(height) < ps {
+        return None;
+    }
+    let mut finest = params.finest_level;
+    while finest > 0 && (width >> finest).min(height >> finest) < ps {
+        finest -= 1;
+    }
+    let long = width.max(height) as f64 / (4.0 * ps as f64);
+    let by_long = if long > 1.0 {
+        long.log2().round() as usize
+    } else {
+        0
+    };
+    let by_short = ((width.min(height) / ps) as f64).log2().floor() as usize;
+    Some((finest, by_long.min(by_short).max(finest)))
+}
+
+/// Flow from the image of pyramid `from` to that of `to` (levels `finest..` of both, as built by
+/// [`super::pyramid::build`]) at the resolution of their first level, as `(u, v)` row-major.
+/// `progress` gets the share of the work done, in [0, 1].
+pub fn dis_flow(
+    from: &[Level],
+    to: &[Level],
+    params: &DisParams,
+    progress: &mut dyn FnMut(f32),
+) -> (Vec<f32>, Vec<f32>) {
+    let work: f32 = from.iter().map(|l| (l.width * l.height) as f32).sum();
+    let mut done = 0.0;
+    let mut flow: Option<(Vec<f32>, Vec<f32>, usize, usize)> = None;
+    for (a, b) in from.iter().zip(to).rev() {
+        let (w, h) = (a.width, a.height);
+        let (u0, v0) = match &flow {
+            Some((u, v, cw, ch)) => (
+                upsample(u, *cw, *ch, w, h, 2.0),
+                upsample(v, *cw, *ch, w, h, 2.0),
+            ),
+            None => (vec![0.0; w * h], vec![0.0; w * h]),
+        };
+        let search = PatchSearch::new(a, b, params.patch_size, params.patch_stride);
+        let sparse = search.run(&u0, &v0, params.iterations);
+        let (mut u, mut v) = search.densify(&sparse);
+        refine(a, b, &mut u, &mut v, &params.variational);
+        flow = Some((u, v, w, h));
+        done += (w * h) as f32;
+        progress(done / work);
+    }
+    match flow {
+        Some((u, v, _, _)) => (u, v),
+        None => (Vec::new(), Vec::new()),
+    }
+}
+
+/// Frame 2 of a level with a replicated border, so a patch displaced anywhere (its origin
+/// clamped to at most `patch_size − 1` pixels outside the image) samples without coordinate
+/// checks.
+struct PaddedImage {
+    data: Vec<f32>,
+    /// Row length of `data`: width + 2·pad.
+    stride: usize,
+    pad: usize,
+    width: usize,
+    height: usize,
+}
+
+impl PaddedImage {
+    fn new(level: &Level, pad: usize) -> Self {
+        let (w, h) = (level.width, level.height);
+        let stride = w + 2 * pad;
+        let mut data = Vec::with_capacity(stride * (h + 2 * pad));
+        for py in 0..h + 2 * pad {
+            let row = &level.pixels[py.saturating_sub(pad).min(h - 1) * w..][..w];
+            data.extend(std::iter::repeat_n(row[0], pad));
+            data.extend_from_slice(row);
+            data.extend(std::iter::repeat_n(row[w - 1], pad));
+        }
+        PaddedImage {
+            data,
+            stride,
+            pad,
+            width: w,
+            height: h,
+        }
+    }
+
+    /// Where a patch with origin (x, y) displaced by `d` reads: the index in `data` of its top-left
+    /// sample and the bilinear weights `[w00, w01, w10, w11]` (top-left, top-right, bottom-left,
+    /// bottom-right), the same for every pixel of the patch.
+    #[inline]
+    fn locate(&self, x: usize, y: usize, d: [f32; 2], ps: usize) -> (usize, [f32; 4]) {
+        let lo = -(ps as f32 - 1.0);
+        let ox = (x as f32 + d[0]).clamp(lo, (self.width - 1) as f32);
+        let oy = (y as f32 + d[1]).clamp(lo, (self.height - 1) as f32);
+        let (fx, fy) = (ox.floor(), oy.floor());
+        let (ax, ay) = (ox - fx, oy - fy);
+        let ix = (fx as isize + self.pad as isize) as usize;
+        let iy = (fy as isize + self.pad as isize) as usize;
+        let weights = [
+            (1.0 - ax) * (1.0 - ay),
+            ax * (1.0 - ay),
+            (1.0 - ax) * ay,
+            ax * ay,
+        ];
+        (iy * self.stride + ix, weights)
+    }
+}
+
+/// One level's patch grid with everything about frame 1 that Gauss–Newton reuses.
+struct PatchSearch<'a> {
+    from: &'a Level,
+    to: PaddedImage,
+    ps: usize,
+    /// Patch origins (top-left pixel) along x and along y.
+    xs: Vec<usize>,
+    ys: Vec<usize>,
+    /// Per patch: inverse of the mean-normalised Gauss–Newton Hessian, `[a, b, c]` of
+    /// [[a, b], [b, c]].
+    inv_hessian: Vec<[f32; 3]>,
+    /// Per patch: sums of the template's x and y gradients (for mean normalisation).
+    grad_sum: Vec<[f32; 2]>,
+}
+
+/// Regularisation added to the diagonal of each patch's Hessian, per pixel (grey levels² per
+/// pixel²): steps along an edge or in a flat patch stay small instead of exploding.
+const HESSIAN_FLOOR: f32 = 0.1;
+
+/// A Gauss–Newton step shorter than this (pixels) ends a patch's iterations.
+const CONVERGED_STEP: f32 = 0.01;
+
+impl<'a> PatchSearch<'a> {
+    fn new(from: &'a Level, to: &Level, ps: usize, stride: usize) -> Self {
+        let xs = origins(from.width, ps, stride);
+        let ys = origins(from.height, ps, stride);
+        let n = (ps * ps) as f32;
+        let mut inv_hessian = Vec::with_capacity(xs.len() * ys.len());
+        let mut grad_sum = Vec::with_capacity(xs.len() * ys.len());
+        for &y0 in &ys {
+            for &x0 in &xs {
+                let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
+                for y in y0..y0 + ps {
+                    let row = y * from.width + x0;
+                    for (&gx, &gy) in from.gx[row..row + ps].iter().zip(&from.gy[row..row + ps]) {
+                        sx += gx;
+                        sy += gy;
+                        sxx += gx * gx;
+                        sxy += gx * gy;
+                        syy += gy * gy;
+                    }
+                }
+                // Hessian of the mean-normalised residual: the gradients minus their mean.
+                let a = sxx - sx * sx / n + HESSIAN_FLOOR * n;
+                let b = sxy - sx * sy / n;
+                let c = syy - sy * sy / n + HESSIAN_FLOOR * n;
+                let det = a * c - b * b;
+                inv_hessian.push([c / det, -b / det, a / det]);
+                grad_sum.push([sx, sy]);
+            }
+        }
+        PatchSearch {
+            from,
+            to: PaddedImage::new(to, ps + 1),
+            ps,
+            xs,
+            ys,
+            inv_hessian,
+            grad_sum,
+        }
+    }
+
+    /// Patch displacements: each patch starts from the dense initial field (u0, v0) at its
+    /// centre, then two propagation sweeps with Gauss–Newton refinement.
+    fn run(&self, u0: &[f32], v0: &[f32], iterations: usize) -> Vec<[f32; 2]> {
+        let (nx, ny) = (self.xs.len(), self.ys.len());
+        let w = self.from.width;
+        let h = self.from.height;
+        let centre = (self.ps as f32 - 1.0) / 2.0;
+        let mut flow = Vec::with_capacity(nx * ny);
+        for &y0 in &self.ys {
+            for &x0 in &self.xs {
+                let (cx, cy) = (x0 as f32 + centre, y0 as f32 + centre);
+                flow.push([
+                    super::pyramid::sample_clamped(u0, w, h, cx, cy),
+                    super::pyramid::sample_clamped(v0, w, h, cx, cy),
+                ]);
+            }
+        }
+        let first = iterations - iterations / 2;
+        let mut scratch = Scratch::new(self.ps);
+        // Forward sweep: candidates from the left and upper neighbours.
+        for j in 0..ny {
+            for i in 0..nx {
+                let k = j * nx + i;
+                let left = (i > 0).then(|| flow[k - 1]);
+                let up = (j > 0).then(|| flow[k - nx]);
+                flow[k] = self.improve(k, flow[k], [left, up], first, &mut scratch);
+            }
+        }
+        // Backward sweep: candidates from the right and lower neighbours.
+        for j in (0..ny).rev() {
+            for i in (0..nx).rev() {
+                let k = j * nx + i;
+                let right = (i + 1 < nx).then(|| flow[k + 1]);
+                let down = (j + 1 < ny).then(|| flow[k + nx]);
+                flow[k] = self.improve(k, flow[k], [right, down], iterations / 2, &mut scratch);
+            }
+        }
+        flow
+    }
+
+    /// Patch `k`'s best start among its current displacement and the neighbours' (lowest
+    /// mean-normalised SSD), refined by up to `iterations` Gauss–Newton steps. A refinement that
+    /// wanders more than a patch side from its start is dropped, as in OpenCV.
+    fn improve(
+        &self,
+        k: usize,
+        current: [f32; 2],
+        candidates: [Option<[f32; 2]>; 2],
+        iterations: usize,
+        scratch: &mut Scratch,
+    ) -> [f32; 2] {
+        let mut start = current;
+        let mut start_ssd = None;
+        for candidate in candidates.into_iter().flatten() {
+            if candidate == start {
+                continue;
+            }
+            let ssd_start = match start_ssd {
+                Some(s) => s,
+                None => self.residual(k, start, scratch).0,
+            };
+            let ssd = self.residual(k, candidate, scratch).0;
+            if ssd < ssd_start {
+                start = candidate;
+                start_ssd = Some(ssd);
+            } else {
+                start_ssd = Some(ssd_start);
+            }
+        }
+        let refined = self.descend(k, start, iterations, scratch);
+        let moved = (refined[0] - start[0]).hypot(refined[1] - start[1]);
+        if moved <= self.ps as f32 {
+            refined
+        } else {
+            start
+        }
+    }
+
+    /// Inverse-compositional Gauss–Newton from `start`: each step solves with the patch's fixed
+    /// Hessian; stops when a step is tiny, or when the SSD stops falling (then returns the best
+    /// point seen).
+    fn descend(
+        &self,
+        k: usize,
+        start: [f32; 2],
+        iterations: usize,
+        scratch: &mut Scratch,
+    ) -> [f32; 2] {
+        let [a, b, c] = self.inv_hessian[k];
+        let mut d = start;
+        let mut best = (f32::INFINITY, start);
+        for _ in 0..iterations {
+            let (ssd, gx, gy) = self.residual(k, d, scratch);
+            if ssd >= best.0 {
+                return best.1;
+            }
+            best = (ssd, d);
+            let (sx, sy) = (a * gx + b * gy, b * gx + c * gy);
+            d = [d[0] - sx, d[1] - sy];
+            if sx * sx + sy * sy < CONVERGED_STEP * CONVERGED_STEP {
+                break;
+            }
+        }
+        d
+    }
+
+    /// Mean-normalised SSD between patch `k` of frame 1 and frame 2 displaced by `d`, and the
+    /// Gauss–Newton gradient Σ (g − ḡ)·r of the template gradients g against the residual r.
+    fn residual(&self, k: usize, d: [f32; 2], scratch: &mut Scratch) -> (f32, f32, f32) {
+        let ps = self.ps;
+        let nx = self.xs.len();
+        let (x0, y0) = (self.xs[k % nx], self.ys[k / nx]);
+        let (start, [w00, w01, w10, w11]) = self.to.locate(x0, y0, d, ps);
+        scratch.clear();
+        let Scratch { sum, sq, bx, by } = scratch;
+        let (sum, sq, bx, by) = (&mut sum[..ps], &mut sq[..ps], &mut bx[..ps], &mut by[..ps]);
+        let stride = self.to.stride;
+        let w = self.from.width;
+        for r in 0..ps {
+            let top = &self.to.data[start + r * stride..][..ps + 1];
+            let bottom = &self.to.data[start + (r + 1) * stride..][..ps + 1];
+            let at = (y0 + r) * w + x0;
+            let template = &self.from.pixels[at..at + ps];
+            let gx = &self.from.gx[at..at + ps];
+            let gy = &self.from.gy[at..at + ps];
+            for c in 0..ps {
+                let sample =
+                    w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
+                let diff = sample - template[c];
+                sum[c] += diff;
+                sq[c] += diff * diff;
+                bx[c] += gx[c] * diff;
+                by[c] += gy[c] * diff;
+            }
+        }
+        let n = (ps * ps) as f32;
+        let (s, q): (f32, f32) = (sum.iter().sum(), sq.iter().sum());
+        let [gsx, gsy] = self.grad_sum[k];
+        let gx = bx.iter().sum::<f32>() - s * gsx / n;
+        let gy = by.iter().sum::<f32>() - s * gsy / n;
+        ((q - s * s / n).max(0.0), gx, gy)
+    }
+
+    /// The dense field: every pixel averages the displacements of the patches covering it, each
+    /// weighted by 1 / max(1, |I₂(x + d) − I₁(x)|).
+    fn densify(&self, flow: &[[f32; 2]]) -> (Vec<f32>, Vec<f32>) {
+        let (w, h) = (self.from.width, self.from.height);
+        let ps = self.ps;
+        let nx = self.xs.len();
+        let mut su = vec![0.0f32; w * h];
+        let mut sv = vec![0.0f32; w * h];
+        let mut sw = vec![0.0f32; w * h];
+        for (k, &d) in flow.iter().enumerate() {
+            let (x0, y0) = (self.xs[k % nx], self.ys[k / nx]);
+            let (start, [w00, w01, w10, w11]) = self.to.locate(x0, y0, d, ps);
+            for r in 0..ps {
+                let top = &self.to.data[start + r * self.to.stride..][..ps + 1];
+                let bottom = &self.to.data[start + (r + 1) * self.to.stride..][..ps + 1];
+                let at = (y0 + r) * w + x0;
+                let template = &self.from.pixels[at..at + ps];
+                let (su, sv, sw) = (
+                    &mut su[at..at + ps],
+                    &mut sv[at..at + ps],
+                    &mut sw[at..at + ps],
+                );
+                for c in 0..ps {
+                    let sample =
+                        w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
+                    let weight = 1.0 / (sample - template[c]).abs().max(1.0);
+                    su[c] += weight * d[0];
+                    sv[c] += weight * d[1];
+                    sw[c] += weight;
+                }
+            }
+        }
+        // Every pixel is covered: the grid always includes the last origin on each axis.
+        for ((u, v), s) in su.iter_mut().zip(sv.iter_mut()).zip(&sw) {
+            *u /= s;
+            *v /= s;
+        }
+        (su, sv)
+    }
+}
+
+/// Per-column partial sums of one residual evaluation (kept apart so the loop vectorises and
+/// the summation order is fixed).
+struct Scratch {
+    sum: Vec<f32>,
+    sq: Vec<f32>,
+    bx: Vec<f32>,
+    by: Vec<f32>,
+}
+
+impl Scratch {
+    fn new(ps: usize) -> Self {
+        Scratch {
+            sum: vec![0.0; ps],
+            sq: vec![0.0; ps],
+            bx: vec![0.0; ps],
+            by: vec![0.0; ps],
+        }
+    }
+
+    fn clear(&mut self) {
+        for buffer in [&mut self.sum, &mut self.sq, &mut self.bx, &mut self.by] {
+            buffer.fill(0.0);
+        }
+    }
+}
+
+/// Patch origins along an axis of `len` pixels: every `stride`, plus the last one that fits, so
+/// every pixel is covered.
+fn origins(len: usize, patch: usize, stride: usize) -> Vec<usize> {
+    let last = len - patch;
+    let mut out: Vec<usize> = (0..=last).step_by(stride).collect();
+    if out.last() != Some(&last) {
+        out.push(last);
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn origins_cover_the_axis() {
+        assert_eq!(origins(20, 8, 3), vec![0, 3, 6, 9, 12]);
+        assert_eq!(origins(21, 8, 3), vec![0, 3, 6, 9, 12, 13]);
+        assert_eq!(origins(8, 8, 3), vec![0]);
+    }
+
+    #[test]
+    fn levels_follow_opencv_and_shrink_for_small_images() {
+        let p = DisParams::preset(Preset::Medium);
+        assert_eq!(levels(1024, 436, &p), Some((1, 5)));
+        assert_eq!(levels(741, 500, &p), Some((1, 5)));
+        assert_eq!(levels(12, 12, &p), Some((0, 0)));
+        assert_eq!(levels(7, 100, &p), None);
+        let fast = DisParams::preset(Preset::Fast);
+        assert_eq!(levels(20, 40, &fast), Some((1, 1)));
+    }
+
+    #[test]
+    fn presets_parse_and_validate() {
+        for preset in Preset::ALL {
+            assert_eq!(Preset::from_name(preset.name()).unwrap(), preset);
+            DisParams::preset(preset).validate().unwrap();
+        }
+        assert!(Preset::from_name("slow").is_err());
+        let mut p = DisParams::default();
+        p.patch_stride = 0;
+        assert!(p.validate().is_err());
+    }
+}
