@@ -27,8 +27,9 @@ pub fn forward_backward_mask(
         let Some(b) = sample_flow(backward, tx, ty) else {
             return false;
         };
-        let gap = (f[0] + b[0]).hypot(f[1] + b[1]);
-        gap < threshold + relative * f[0].hypot(f[1])
+        let (gx, gy) = (f[0] + b[0], f[1] + b[1]);
+        let gap = (gx * gx + gy * gy).sqrt();
+        gap < threshold + relative * (f[0] * f[0] + f[1] * f[1]).sqrt()
     }))
 }
 

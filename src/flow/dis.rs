@@ -69,6 +69,11 @@ pub struct DisParams {
     pub finest_level: usize,
     /// Gauss–Newton iterations per patch and level, shared by the two propagation sweeps.
     pub iterations: usize,
+    /// Share of each Gauss–Newton step taken, in (0, 1]. Full steps jump between the basins of
+    /// repetitive texture; shorter ones stay in the basin the start lies in. (OpenCV's
+    /// implementation takes 1/8 of the step, a side effect of its unnormalised Sobel
+    /// gradients; 0.2–0.3 measured best here.)
+    pub step_scale: f32,
     /// Variational refinement run on every level.
     pub variational: VariationalParams,
 }
@@ -77,16 +82,18 @@ impl DisParams {
     /// The parameters of `preset`.
     pub fn preset(preset: Preset) -> Self {
         let variational = VariationalParams::default();
-        let (patch_stride, finest_level, iterations) = match preset {
-            Preset::Fast => (4, 2, 16),
-            Preset::Medium => (3, 1, 25),
-            Preset::High => (2, 0, 32),
+        // Fewer iterations need longer steps to travel as far.
+        let (patch_stride, finest_level, iterations, step_scale) = match preset {
+            Preset::Fast => (4, 2, 16, 0.3),
+            Preset::Medium => (3, 1, 25, 0.25),
+            Preset::High => (2, 0, 32, 0.2),
         };
         DisParams {
             patch_size: 8,
             patch_stride,
             finest_level,
             iterations,
+            step_scale,
             variational,
         }
     }
@@ -102,6 +109,9 @@ impl DisParams {
                 "patch stride {} must be between 1 and the patch size {}",
                 self.patch_stride, self.patch_size
             ));
+        }
+        if !(self.step_scale > 0.0 && self.step_scale <= 1.0) {
+            return bad(format!("step scale {} is outside (0, 1]", self.step_scale));
         }
         if self.finest_level > 8 {
             return bad(format!("finest level {} is above 8", self.finest_level));
@@ -160,7 +170,7 @@ pub fn dis_flow(
             ),
             None => (vec![0.0; w * h], vec![0.0; w * h]),
         };
-        let search = PatchSearch::new(a, b, params.patch_size, params.patch_stride);
+        let search = PatchSearch::new(a, b, params);
         let sparse = search.run(&u0, &v0, params.iterations);
         let (mut u, mut v) = search.densify(&sparse);
         refine(a, b, &mut u, &mut v, &params.variational);
@@ -214,10 +224,10 @@ impl PaddedImage {
         let lo = -(ps as f32 - 1.0);
         let ox = (x as f32 + d[0]).clamp(lo, (self.width - 1) as f32);
         let oy = (y as f32 + d[1]).clamp(lo, (self.height - 1) as f32);
-        let (fx, fy) = (ox.floor(), oy.floor());
-        let (ax, ay) = (ox - fx, oy - fy);
-        let ix = (fx as isize + self.pad as isize) as usize;
-        let iy = (fy as isize + self.pad as isize) as usize;
+        // Shifted into the padding the coordinates are positive, so truncation is the floor.
+        let (px, py) = (ox + self.pad as f32, oy + self.pad as f32);
+        let (ix, iy) = (px as usize, py as usize);
+        let (ax, ay) = (px - ix as f32, py - iy as f32);
         let weights = [
             (1.0 - ax) * (1.0 - ay),
             ax * (1.0 - ay),
@@ -233,6 +243,8 @@ struct PatchSearch<'a> {
     from: &'a Level,
     to: PaddedImage,
     ps: usize,
+    /// Share of each Gauss–Newton step taken ([`DisParams::step_scale`]).
+    step_scale: f32,
     /// Patch origins (top-left pixel) along x and along y.
     xs: Vec<usize>,
     ys: Vec<usize>,
@@ -251,7 +263,8 @@ const HESSIAN_FLOOR: f32 = 0.1;
 const CONVERGED_STEP: f32 = 0.01;
 
 impl<'a> PatchSearch<'a> {
-    fn new(from: &'a Level, to: &Level, ps: usize, stride: usize) -> Self {
+    fn new(from: &'a Level, to: &Level, params: &DisParams) -> Self {
+        let (ps, stride) = (params.patch_size, params.patch_stride);
         let xs = origins(from.width, ps, stride);
         let ys = origins(from.height, ps, stride);
         let n = (ps * ps) as f32;
@@ -283,6 +296,7 @@ impl<'a> PatchSearch<'a> {
             from,
             to: PaddedImage::new(to, ps + 1),
             ps,
+            step_scale: params.step_scale,
             xs,
             ys,
             inv_hessian,
@@ -308,14 +322,13 @@ impl<'a> PatchSearch<'a> {
             }
         }
         let first = iterations - iterations / 2;
-        let mut scratch = Scratch::new(self.ps);
         // Forward sweep: candidates from the left and upper neighbours.
         for j in 0..ny {
             for i in 0..nx {
                 let k = j * nx + i;
                 let left = (i > 0).then(|| flow[k - 1]);
                 let up = (j > 0).then(|| flow[k - nx]);
-                flow[k] = self.improve(k, flow[k], [left, up], first, &mut scratch);
+                flow[k] = self.improve(k, flow[k], [left, up], first);
             }
         }
         // Backward sweep: candidates from the right and lower neighbours.
@@ -324,7 +337,7 @@ impl<'a> PatchSearch<'a> {
                 let k = j * nx + i;
                 let right = (i + 1 < nx).then(|| flow[k + 1]);
                 let down = (j + 1 < ny).then(|| flow[k + nx]);
-                flow[k] = self.improve(k, flow[k], [right, down], iterations / 2, &mut scratch);
+                flow[k] = self.improve(k, flow[k], [right, down], iterations / 2);
             }
         }
         flow
@@ -339,7 +352,6 @@ impl<'a> PatchSearch<'a> {
         current: [f32; 2],
         candidates: [Option<[f32; 2]>; 2],
         iterations: usize,
-        scratch: &mut Scratch,
     ) -> [f32; 2] {
         let mut start = current;
         let mut start_ssd = None;
@@ -349,9 +361,9 @@ impl<'a> PatchSearch<'a> {
             }
             let ssd_start = match start_ssd {
                 Some(s) => s,
-                None => self.residual(k, start, scratch).0,
+                None => self.residual(k, start).0,
             };
-            let ssd = self.residual(k, candidate, scratch).0;
+            let ssd = self.residual(k, candidate).0;
             if ssd < ssd_start {
                 start = candidate;
                 start_ssd = Some(ssd);
@@ -359,9 +371,9 @@ impl<'a> PatchSearch<'a> {
                 start_ssd = Some(ssd_start);
             }
         }
-        let refined = self.descend(k, start, iterations, scratch);
-        let moved = (refined[0] - start[0]).hypot(refined[1] - start[1]);
-        if moved <= self.ps as f32 {
+        let refined = self.descend(k, start, iterations);
+        let (mx, my) = (refined[0] - start[0], refined[1] - start[1]);
+        if mx * mx + my * my <= (self.ps * self.ps) as f32 {
             refined
         } else {
             start
@@ -371,23 +383,20 @@ impl<'a> PatchSearch<'a> {
     /// Inverse-compositional Gauss–Newton from `start`: each step solves with the patch's fixed
     /// Hessian; stops when a step is tiny, or when the SSD stops falling (then returns the best
     /// point seen).
-    fn descend(
-        &self,
-        k: usize,
-        start: [f32; 2],
-        iterations: usize,
-        scratch: &mut Scratch,
-    ) -> [f32; 2] {
+    fn descend(&self, k: usize, start: [f32; 2], iterations: usize) -> [f32; 2] {
         let [a, b, c] = self.inv_hessian[k];
         let mut d = start;
         let mut best = (f32::INFINITY, start);
         for _ in 0..iterations {
-            let (ssd, gx, gy) = self.residual(k, d, scratch);
+            let (ssd, gx, gy) = self.residual(k, d);
             if ssd >= best.0 {
                 return best.1;
             }
             best = (ssd, d);
-            let (sx, sy) = (a * gx + b * gy, b * gx + c * gy);
+            let (sx, sy) = (
+                self.step_scale * (a * gx + b * gy),
+                self.step_scale * (b * gx + c * gy),
+            );
             d = [d[0] - sx, d[1] - sy];
             if sx * sx + sy * sy < CONVERGED_STEP * CONVERGED_STEP {
                 break;
@@ -398,39 +407,31 @@ impl<'a> PatchSearch<'a> {
 
     /// Mean-normalised SSD between patch `k` of frame 1 and frame 2 displaced by `d`, and the
     /// Gauss–Newton gradient Σ (g − ḡ)·r of the template gradients g against the residual r.
-    fn residual(&self, k: usize, d: [f32; 2], scratch: &mut Scratch) -> (f32, f32, f32) {
+    fn residual(&self, k: usize, d: [f32; 2]) -> (f32, f32, f32) {
         let ps = self.ps;
         let nx = self.xs.len();
         let (x0, y0) = (self.xs[k % nx], self.ys[k / nx]);
-        let (start, [w00, w01, w10, w11]) = self.to.locate(x0, y0, d, ps);
-        scratch.clear();
-        let Scratch { sum, sq, bx, by } = scratch;
-        let (sum, sq, bx, by) = (&mut sum[..ps], &mut sq[..ps], &mut bx[..ps], &mut by[..ps]);
+        let (start, weights) = self.to.locate(x0, y0, d, ps);
         let stride = self.to.stride;
         let w = self.from.width;
+        // Four independent lanes per sum: the loop vectorises and its order is fixed.
+        let mut acc = Lanes::default();
         for r in 0..ps {
             let top = &self.to.data[start + r * stride..][..ps + 1];
             let bottom = &self.to.data[start + (r + 1) * stride..][..ps + 1];
             let at = (y0 + r) * w + x0;
-            let template = &self.from.pixels[at..at + ps];
-            let gx = &self.from.gx[at..at + ps];
-            let gy = &self.from.gy[at..at + ps];
-            for c in 0..ps {
-                let sample =
-                    w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
-                let diff = sample - template[c];
-                sum[c] += diff;
-                sq[c] += diff * diff;
-                bx[c] += gx[c] * diff;
-                by[c] += gy[c] * diff;
-            }
+            acc.add_row(
+                [&top[..ps], &top[1..], &bottom[..ps], &bottom[1..]],
+                weights,
+                &self.from.pixels[at..at + ps],
+                &self.from.gx[at..at + ps],
+                &self.from.gy[at..at + ps],
+            );
         }
         let n = (ps * ps) as f32;
-        let (s, q): (f32, f32) = (sum.iter().sum(), sq.iter().sum());
+        let [s, q, bx, by] = acc.totals();
         let [gsx, gsy] = self.grad_sum[k];
-        let gx = bx.iter().sum::<f32>() - s * gsx / n;
-        let gy = by.iter().sum::<f32>() - s * gsy / n;
-        ((q - s * s / n).max(0.0), gx, gy)
+        ((q - s * s / n).max(0.0), bx - s * gsx / n, by - s * gsy / n)
     }
 
     /// The dense field: every pixel averages the displacements of the patches covering it, each
@@ -474,29 +475,62 @@ impl<'a> PatchSearch<'a> {
     }
 }
 
-/// Per-column partial sums of one residual evaluation (kept apart so the loop vectorises and
-/// the summation order is fixed).
-struct Scratch {
-    sum: Vec<f32>,
-    sq: Vec<f32>,
-    bx: Vec<f32>,
-    by: Vec<f32>,
+/// Partial sums of one residual evaluation in four lanes each: Σr, Σr², Σgx·r, Σgy·r over the
+/// pixels of a patch, r = bilinear sample of frame 2 − template.
+#[derive(Default)]
+struct Lanes {
+    sum: [f32; 4],
+    sq: [f32; 4],
+    bx: [f32; 4],
+    by: [f32; 4],
 }
 
-impl Scratch {
-    fn new(ps: usize) -> Self {
-        Scratch {
-            sum: vec![0.0; ps],
-            sq: vec![0.0; ps],
-            bx: vec![0.0; ps],
-            by: vec![0.0; ps],
+impl Lanes {
+    /// Adds one patch row: `corners` are the frame-2 rows at the four bilinear taps (top-left,
+    /// top-right, bottom-left, bottom-right), each as long as the template row.
+    #[inline]
+    fn add_row(
+        &mut self,
+        corners: [&[f32]; 4],
+        [w00, w01, w10, w11]: [f32; 4],
+        template: &[f32],
+        gx: &[f32],
+        gy: &[f32],
+    ) {
+        let [tl, tr, bl, br] = corners.map(|c| c.as_chunks::<4>());
+        let (t, t_rest) = template.as_chunks::<4>();
+        let (gx4, gx_rest) = gx.as_chunks::<4>();
+        let (gy4, gy_rest) = gy.as_chunks::<4>();
+        let quads = t
+            .len()
+            .min(tl.0.len())
+            .min(tr.0.len())
+            .min(bl.0.len())
+            .min(br.0.len());
+        for i in 0..quads.min(gx4.len()).min(gy4.len()) {
+            for l in 0..4 {
+                let sample =
+                    w00 * tl.0[i][l] + w01 * tr.0[i][l] + w10 * bl.0[i][l] + w11 * br.0[i][l];
+                let r = sample - t[i][l];
+                self.sum[l] += r;
+                self.sq[l] += r * r;
+                self.bx[l] += gx4[i][l] * r;
+                self.by[l] += gy4[i][l] * r;
+            }
+        }
+        for (j, ((&t, &gx), &gy)) in t_rest.iter().zip(gx_rest).zip(gy_rest).enumerate() {
+            let sample = w00 * tl.1[j] + w01 * tr.1[j] + w10 * bl.1[j] + w11 * br.1[j];
+            let r = sample - t;
+            self.sum[0] += r;
+            self.sq[0] += r * r;
+            self.bx[0] += gx * r;
+            self.by[0] += gy * r;
         }
     }
 
-    fn clear(&mut self) {
-        for buffer in [&mut self.sum, &mut self.sq, &mut self.bx, &mut self.by] {
-            buffer.fill(0.0);
-        }
+    /// `[Σr, Σr², Σgx·r, Σgy·r]`.
+    fn totals(&self) -> [f32; 4] {
+        [self.sum, self.sq, self.bx, self.by].map(|l| (l[0] + l[1]) + (l[2] + l[3]))
     }
 }
 

@@ -114,15 +114,28 @@ pub fn sample_clamped(image: &[f32], w: usize, h: usize, x: f32, y: f32) -> f32 
 }
 
 /// A flow component of a level `factor` times coarser resampled to `w × h` and multiplied by
-/// `factor` (a power of two): pixel x here reads the coarse field at (x + 0.5) / factor − 0.5.
+/// `factor` (a power of two): pixel x here reads the coarse field at (x + 0.5) / factor − 0.5
+/// (bilinear, clamped).
 pub fn upsample(coarse: &[f32], cw: usize, ch: usize, w: usize, h: usize, factor: f32) -> Vec<f32> {
+    // Bilinear taps along one axis: (first index, second index, weight of the second).
+    let taps = |n: usize, coarse_n: usize| -> Vec<(usize, usize, f32)> {
+        (0..n)
+            .map(|i| {
+                let c = ((i as f32 + 0.5) / factor - 0.5).clamp(0.0, (coarse_n - 1) as f32);
+                let i0 = c as usize;
+                (i0, (i0 + 1).min(coarse_n - 1), c - i0 as f32)
+            })
+            .collect()
+    };
+    let (xs, ys) = (taps(w, cw), taps(h, ch));
     let mut out = Vec::with_capacity(w * h);
-    for y in 0..h {
-        let cy = (y as f32 + 0.5) / factor - 0.5;
-        for x in 0..w {
-            let cx = (x as f32 + 0.5) / factor - 0.5;
-            out.push(factor * sample_clamped(coarse, cw, ch, cx, cy));
-        }
+    for &(y0, y1, ay) in &ys {
+        let (top, bottom) = (&coarse[y0 * cw..][..cw], &coarse[y1 * cw..][..cw]);
+        out.extend(xs.iter().map(|&(x0, x1, ax)| {
+            let t = top[x0] + ax * (top[x1] - top[x0]);
+            let b = bottom[x0] + ax * (bottom[x1] - bottom[x0]);
+            factor * (t + ay * (b - t))
+        }));
     }
     out
 }

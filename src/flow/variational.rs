@@ -8,7 +8,8 @@
 //! with E_I the linearised brightness constancy (I_z + I_x du + I_y dv)² and E_G the linearised
 //! gradient constancy, each normalised by the squared local gradient (+ ζ²) so strong edges do
 //! not dominate. Frame 2 is warped once by w; the derivatives are taken on the mean of frame 1
-//! and the warped frame 2. Each fixed-point (outer) iteration freezes the robust weights Ψ' at
+//! and the warped frame 2. Pixels that w carries outside frame 2 get no data term (frame 2 holds
+//! nothing to compare them with), so smoothness extends the flow of their neighbours. Each fixed-point (outer) iteration freezes the robust weights Ψ' at
 //! the current dw and solves the resulting linear system with a few SOR sweeps (Gauss–Seidel in
 //! raster order, relaxation ω, each pixel's 2 × 2 block solved for du then dv).
 //!
@@ -80,84 +81,78 @@ pub fn refine(from: &Level, to: &Level, u: &mut [f32], v: &mut [f32], params: &V
     if params.iterations == 0 || w < 2 || h < 2 {
         return;
     }
-    let derivatives = Derivatives::new(from, to, u, v);
-    let mut system = System::new(w, h);
-    // Base flow in the padded layout (border values replicate the edge).
-    let pad_u = padded(u, w, h);
-    let pad_v = padded(v, w, h);
+    let terms = data_terms(from, to, u, v);
+    let mut system = System::new(w, h, u, v);
     for _ in 0..params.iterations {
-        system.data_terms(&derivatives, params);
-        system.smoothness_terms(&pad_u, &pad_v, params);
+        system.linearise(&terms, params);
         for _ in 0..params.sor_iterations {
-            system.sor_sweep(params.omega);
+            system.sor_half_sweep(params.omega, 0);
+            system.sor_half_sweep(params.omega, 1);
         }
     }
     for y in 0..h {
-        let row = (y + 1) * (w + 2) + 1;
+        let row = &system.increment[(y + 1) * (w + 2) + 1..][..w];
+        for (x, d) in row.iter().enumerate() {
+            u[y * w + x] += d[0];
+            v[y * w + x] += d[1];
+        }
+    }
+}
+
+/// The linearised constancy equations of one pixel, each already divided by its normalisation
+/// √(|∇·|² + ζ²): brightness `[0]·du + [1]·dv + [2]`, x-gradient `[3]·du + [4]·dv + [5]`,
+/// y-gradient `[6]·du + [7]·dv + [8]`.
+type Constancy = [f32; 9];
+
+/// The constancy equations of every pixel at the current flow, in the padded layout (zero on
+/// the border and where (u, v) leaves the image): `to` warped by (u, v), derivatives of the mean
+/// of `from` and the warped image and of their difference (central differences, one-sided at
+/// borders), normalised.
+fn data_terms(from: &Level, to: &Level, u: &[f32], v: &[f32]) -> Vec<Constancy> {
+    let (w, h) = (from.width, from.height);
+    let mut mean = Vec::with_capacity(w * h);
+    let mut iz = Vec::with_capacity(w * h);
+    let mut inside = Vec::with_capacity(w * h);
+    let (xmax, ymax) = ((w - 1) as f32, (h - 1) as f32);
+    for y in 0..h {
         for x in 0..w {
-            u[y * w + x] += system.du[row + x];
-            v[y * w + x] += system.dv[row + x];
+            let i = y * w + x;
+            let (tx, ty) = (x as f32 + u[i], y as f32 + v[i]);
+            let warped = sample_clamped(&to.pixels, w, h, tx, ty);
+            mean.push(0.5 * (from.pixels[i] + warped));
+            iz.push(warped - from.pixels[i]);
+            inside.push((0.0..=xmax).contains(&tx) && (0.0..=ymax).contains(&ty));
         }
     }
-}
-
-/// A `w × h` row-major field copied into the padded layout, borders replicating the edge.
-fn padded(field: &[f32], w: usize, h: usize) -> Vec<f32> {
-    let stride = w + 2;
-    let mut out = Vec::with_capacity(stride * (h + 2));
-    for py in 0..h + 2 {
-        let row = &field[py.saturating_sub(1).min(h - 1) * w..][..w];
-        out.push(row[0]);
-        out.extend_from_slice(row);
-        out.push(row[w - 1]);
-    }
-    out
-}
-
-/// Image derivatives at the current flow, in the padded layout (zero on the border).
-struct Derivatives {
-    /// Spatial derivatives of the mean of frame 1 and warped frame 2.
-    ix: Vec<f32>,
-    iy: Vec<f32>,
-    /// Temporal difference (warped frame 2 − frame 1).
-    iz: Vec<f32>,
-    /// Second spatial derivatives of the mean image.
-    ixx: Vec<f32>,
-    ixy: Vec<f32>,
-    iyy: Vec<f32>,
-    /// Spatial derivatives of the temporal difference.
-    ixz: Vec<f32>,
-    iyz: Vec<f32>,
-}
-
-impl Derivatives {
-    fn new(from: &Level, to: &Level, u: &[f32], v: &[f32]) -> Self {
-        let (w, h) = (from.width, from.height);
-        let mut mean = Vec::with_capacity(w * h);
-        let mut iz = Vec::with_capacity(w * h);
-        for y in 0..h {
-            for x in 0..w {
-                let i = y * w + x;
-                let warped = sample_clamped(&to.pixels, w, h, x as f32 + u[i], y as f32 + v[i]);
-                mean.push(0.5 * (from.pixels[i] + warped));
-                iz.push(warped - from.pixels[i]);
+    let (ix, iy) = central_differences(&mean, w, h);
+    let (ixz, iyz) = central_differences(&iz, w, h);
+    let (ixx, ixy) = central_differences(&ix, w, h);
+    let (_, iyy) = central_differences(&iy, w, h);
+    let mut terms = vec![[0.0; 9]; (w + 2) * (h + 2)];
+    for y in 0..h {
+        for x in 0..w {
+            let i = y * w + x;
+            if !inside[i] {
+                // Frame 2 holds nothing to compare with: smoothness alone decides.
+                continue;
             }
-        }
-        let (ix, iy) = central_differences(&mean, w, h);
-        let (ixz, iyz) = central_differences(&iz, w, h);
-        let (ixx, ixy) = central_differences(&ix, w, h);
-        let (_, iyy) = central_differences(&iy, w, h);
-        Derivatives {
-            ix: padded_zero(&ix, w, h),
-            iy: padded_zero(&iy, w, h),
-            iz: padded_zero(&iz, w, h),
-            ixx: padded_zero(&ixx, w, h),
-            ixy: padded_zero(&ixy, w, h),
-            iyy: padded_zero(&iyy, w, h),
-            ixz: padded_zero(&ixz, w, h),
-            iyz: padded_zero(&iyz, w, h),
+            let b = 1.0 / (ix[i] * ix[i] + iy[i] * iy[i] + ZETA_SQ).sqrt();
+            let gx = 1.0 / (ixx[i] * ixx[i] + ixy[i] * ixy[i] + ZETA_SQ).sqrt();
+            let gy = 1.0 / (iyy[i] * iyy[i] + ixy[i] * ixy[i] + ZETA_SQ).sqrt();
+            terms[(y + 1) * (w + 2) + x + 1] = [
+                ix[i] * b,
+                iy[i] * b,
+                iz[i] * b,
+                ixx[i] * gx,
+                ixy[i] * gx,
+                ixz[i] * gx,
+                ixy[i] * gy,
+                iyy[i] * gy,
+                iyz[i] * gy,
+            ];
         }
     }
+    terms
 }
 
 /// (∂/∂x, ∂/∂y) of a `w × h` field by central differences, one-sided at the borders.
@@ -176,173 +171,148 @@ fn central_differences(f: &[f32], w: usize, h: usize) -> (Vec<f32>, Vec<f32>) {
     (dx, dy)
 }
 
-/// A `w × h` field copied into the padded layout with a zero border.
-fn padded_zero(field: &[f32], w: usize, h: usize) -> Vec<f32> {
-    let stride = w + 2;
-    let mut out = vec![0.0; stride * (h + 2)];
-    for y in 0..h {
-        out[(y + 1) * stride + 1..][..w].copy_from_slice(&field[y * w..][..w]);
-    }
-    out
+/// One pixel's row of the linear system of a fixed-point iteration:
+/// `du = (rhs_u + Σₙ wₙ·du_n − a12·dv) · inv_u` and `dv = (rhs_v + Σₙ wₙ·dv_n − a12·du) · inv_v`
+/// over the 4-neighbours n, where the edge weights are this pixel's `wx` (right), `wy` (down)
+/// and its left and upper neighbours' `wx` and `wy`.
+#[derive(Clone, Copy, Default)]
+struct Coefficients {
+    /// Smoothness weight of the edge to the right neighbour (0 on the last column).
+    wx: f32,
+    /// Smoothness weight of the edge to the neighbour below (0 on the last row).
+    wy: f32,
+    a12: f32,
+    rhs_u: f32,
+    rhs_v: f32,
+    /// 1 / (a11 + Σ wₙ) and 1 / (a22 + Σ wₙ).
+    inv_u: f32,
+    inv_v: f32,
 }
 
-/// The linear system of one fixed-point iteration, per pixel (padded layout):
-/// `diag_u·du + a12·dv = rhs_u + Σ_n wₙ du_n` and `a12·du + diag_v·dv = rhs_v + Σ_n wₙ dv_n`
-/// over the 4-neighbours n, with the current increments.
+/// The fixed-point problem on a padded `(w + 2) × (h + 2)` layout: border pixels keep zero
+/// increments and zero weights, so the loops need no bounds logic.
 struct System {
     w: usize,
     h: usize,
-    du: Vec<f32>,
-    dv: Vec<f32>,
-    a11: Vec<f32>,
-    a12: Vec<f32>,
-    a22: Vec<f32>,
-    b1: Vec<f32>,
-    b2: Vec<f32>,
-    /// Smoothness weight of the edge from a pixel to its right neighbour (0 on the last column).
-    wx: Vec<f32>,
-    /// Smoothness weight of the edge from a pixel to the one below (0 on the last row).
-    wy: Vec<f32>,
-    /// 1 / (a11 + Σ wₙ) and 1 / (a22 + Σ wₙ).
-    inv_diag_u: Vec<f32>,
-    inv_diag_v: Vec<f32>,
-    rhs_u: Vec<f32>,
-    rhs_v: Vec<f32>,
+    /// Base flow (u, v), borders replicating the edge.
+    flow: Vec<[f32; 2]>,
+    /// Increments (du, dv).
+    increment: Vec<[f32; 2]>,
+    coefficients: Vec<Coefficients>,
 }
 
 impl System {
-    fn new(w: usize, h: usize) -> Self {
-        let n = (w + 2) * (h + 2);
-        let zeros = || vec![0.0f32; n];
+    fn new(w: usize, h: usize, u: &[f32], v: &[f32]) -> Self {
+        let stride = w + 2;
+        let mut flow = vec![[0.0; 2]; stride * (h + 2)];
+        for py in 0..h + 2 {
+            let y = py.saturating_sub(1).min(h - 1);
+            for px in 0..stride {
+                let i = y * w + px.saturating_sub(1).min(w - 1);
+                flow[py * stride + px] = [u[i], v[i]];
+            }
+        }
         System {
             w,
             h,
-            du: zeros(),
-            dv: zeros(),
-            a11: zeros(),
-            a12: zeros(),
-            a22: zeros(),
-            b1: zeros(),
-            b2: zeros(),
-            wx: zeros(),
-            wy: zeros(),
-            inv_diag_u: zeros(),
-            inv_diag_v: zeros(),
-            rhs_u: zeros(),
-            rhs_v: zeros(),
+            flow,
+            increment: vec![[0.0; 2]; stride * (h + 2)],
+            coefficients: vec![Coefficients::default(); stride * (h + 2)],
         }
     }
 
-    /// The data terms (brightness and gradient constancy, robustly weighted at the current
-    /// increments) into a11, a12, a22, b1, b2.
-    fn data_terms(&mut self, d: &Derivatives, params: &VariationalParams) {
-        let (half_delta, half_gamma) = (0.5 * params.delta, 0.5 * params.gamma);
-        let stride = self.w + 2;
-        for y in 1..=self.h {
-            let row = y * stride + 1..y * stride + 1 + self.w;
-            for q in row {
-                let (ix, iy, iz) = (d.ix[q], d.iy[q], d.iz[q]);
-                let (du, dv) = (self.du[q], self.dv[q]);
-                // Brightness constancy, normalised by |∇I|² + ζ².
-                let norm = ix * ix + iy * iy + ZETA_SQ;
-                let r = iz + ix * du + iy * dv;
-                let weight = half_delta / (r * r / norm + EPSILON_SQ).sqrt() / norm;
-                let mut a11 = weight * ix * ix + ZETA_SQ;
-                let mut a12 = weight * ix * iy;
-                let mut a22 = weight * iy * iy + ZETA_SQ;
-                let mut b1 = -weight * iz * ix;
-                let mut b2 = -weight * iz * iy;
-                // Gradient constancy, each component normalised by its own gradient.
-                let (ixx, ixy, iyy, ixz, iyz) = (d.ixx[q], d.ixy[q], d.iyy[q], d.ixz[q], d.iyz[q]);
-                let nx = ixx * ixx + ixy * ixy + ZETA_SQ;
-                let ny = iyy * iyy + ixy * ixy + ZETA_SQ;
-                let rx = ixz + ixx * du + ixy * dv;
-                let ry = iyz + ixy * du + iyy * dv;
-                let weight = half_gamma / (rx * rx / nx + ry * ry / ny + EPSILON_SQ).sqrt();
-                a11 += weight * (ixx * ixx / nx + ixy * ixy / ny);
-                a12 += weight * (ixx * ixy / nx + ixy * iyy / ny);
-                a22 += weight * (ixy * ixy / nx + iyy * iyy / ny);
-                b1 -= weight * (ixx * ixz / nx + ixy * iyz / ny);
-                b2 -= weight * (ixy * ixz / nx + iyy * iyz / ny);
-                self.a11[q] = a11;
-                self.a12[q] = a12;
-                self.a22[q] = a22;
-                self.b1[q] = b1;
-                self.b2[q] = b2;
-            }
-        }
-    }
-
-    /// Smoothness weights α/2 · Ψ'(|∇(u + du)|² + |∇(v + dv)|²) from forward differences, one per
-    /// pixel, given to its right and lower edges; then folds the base flow's smoothness pull and
-    /// the data terms into `rhs_*` and `inv_diag_*`.
-    fn smoothness_terms(&mut self, u: &[f32], v: &[f32], params: &VariationalParams) {
-        let half_alpha = 0.5 * params.alpha;
+    /// Freezes the robust weights at the current increments and builds every pixel's
+    /// [`Coefficients`]: smoothness weight α/2 · Ψ'(|∇(u + du)|² + |∇(v + dv)|²) from forward
+    /// differences (given to the pixel's right and lower edges), the data terms weighted by
+    /// Ψ' of their residuals, and the base flow's smoothness pull.
+    fn linearise(&mut self, terms: &[Constancy], params: &VariationalParams) {
+        let (half_alpha, half_delta, half_gamma) =
+            (0.5 * params.alpha, 0.5 * params.delta, 0.5 * params.gamma);
         let (w, h) = (self.w, self.h);
         let stride = w + 2;
+        let total = |s: &Self, q: usize| {
+            let (f, d) = (s.flow[q], s.increment[q]);
+            [f[0] + d[0], f[1] + d[1]]
+        };
         for y in 1..=h {
             for x in 1..=w {
                 let q = y * stride + x;
-                let (uq, vq) = (u[q] + self.du[q], v[q] + self.dv[q]);
-                let (ux, vx) = if x < w {
-                    (
-                        u[q + 1] + self.du[q + 1] - uq,
-                        v[q + 1] + self.dv[q + 1] - vq,
-                    )
+                let here = total(self, q);
+                let (right, down) = (total(self, q + 1), total(self, q + stride));
+                let (dx, dy) = (x < w, y < h);
+                let gx = if dx {
+                    [right[0] - here[0], right[1] - here[1]]
                 } else {
-                    (0.0, 0.0)
+                    [0.0; 2]
                 };
-                let (uy, vy) = if y < h {
-                    (
-                        u[q + stride] + self.du[q + stride] - uq,
-                        v[q + stride] + self.dv[q + stride] - vq,
-                    )
+                let gy = if dy {
+                    [down[0] - here[0], down[1] - here[1]]
                 } else {
-                    (0.0, 0.0)
+                    [0.0; 2]
                 };
-                let weight =
-                    half_alpha / (ux * ux + uy * uy + vx * vx + vy * vy + EPSILON_SQ).sqrt();
-                self.wx[q] = if x < w { weight } else { 0.0 };
-                self.wy[q] = if y < h { weight } else { 0.0 };
-            }
-        }
-        for y in 1..=h {
-            for q in y * stride + 1..y * stride + 1 + w {
-                let (wl, wr, wu, wd) =
-                    (self.wx[q - 1], self.wx[q], self.wy[q - stride], self.wy[q]);
-                let sum = wl + wr + wu + wd;
-                let pull = |f: &[f32]| {
-                    wl * (f[q - 1] - f[q])
-                        + wr * (f[q + 1] - f[q])
-                        + wu * (f[q - stride] - f[q])
-                        + wd * (f[q + stride] - f[q])
+                let psi = half_alpha
+                    / (gx[0] * gx[0] + gx[1] * gx[1] + gy[0] * gy[0] + gy[1] * gy[1] + EPSILON_SQ)
+                        .sqrt();
+                let wr = if dx { psi } else { 0.0 };
+                let wd = if dy { psi } else { 0.0 };
+                let (wl, wu) = (
+                    self.coefficients[q - 1].wx,
+                    self.coefficients[q - stride].wy,
+                );
+
+                let t = &terms[q];
+                let [du, dv] = self.increment[q];
+                let r = t[2] + t[0] * du + t[1] * dv;
+                let wb = half_delta / (r * r + EPSILON_SQ).sqrt();
+                let rx = t[5] + t[3] * du + t[4] * dv;
+                let ry = t[8] + t[6] * du + t[7] * dv;
+                let wg = half_gamma / (rx * rx + ry * ry + EPSILON_SQ).sqrt();
+                let a11 = wb * t[0] * t[0] + wg * (t[3] * t[3] + t[6] * t[6]) + ZETA_SQ;
+                let a12 = wb * t[0] * t[1] + wg * (t[3] * t[4] + t[6] * t[7]);
+                let a22 = wb * t[1] * t[1] + wg * (t[4] * t[4] + t[7] * t[7]) + ZETA_SQ;
+                let b1 = -wb * t[2] * t[0] - wg * (t[5] * t[3] + t[8] * t[6]);
+                let b2 = -wb * t[2] * t[1] - wg * (t[5] * t[4] + t[8] * t[7]);
+
+                let f = &self.flow;
+                let pull = |c: usize| {
+                    (wl * (f[q - 1][c] - f[q][c]) + wr * (f[q + 1][c] - f[q][c]))
+                        + (wu * (f[q - stride][c] - f[q][c]) + wd * (f[q + stride][c] - f[q][c]))
                 };
-                self.rhs_u[q] = self.b1[q] + pull(u);
-                self.rhs_v[q] = self.b2[q] + pull(v);
-                self.inv_diag_u[q] = 1.0 / (self.a11[q] + sum);
-                self.inv_diag_v[q] = 1.0 / (self.a22[q] + sum);
+                let sum = (wl + wr) + (wu + wd);
+                self.coefficients[q] = Coefficients {
+                    wx: wr,
+                    wy: wd,
+                    a12,
+                    rhs_u: b1 + pull(0),
+                    rhs_v: b2 + pull(1),
+                    inv_u: 1.0 / (a11 + sum),
+                    inv_v: 1.0 / (a22 + sum),
+                };
             }
         }
     }
 
-    /// One SOR sweep in raster order over the increments.
-    fn sor_sweep(&mut self, omega: f32) {
+    /// One SOR half-sweep over the pixels with (x + y) % 2 == `colour` (red–black ordering: the
+    /// pixels of one colour depend only on the other's, so their updates are independent).
+    fn sor_half_sweep(&mut self, omega: f32, colour: usize) {
         let stride = self.w + 2;
         for y in 1..=self.h {
-            for q in y * stride + 1..y * stride + 1 + self.w {
-                let (wl, wr, wu, wd) =
-                    (self.wx[q - 1], self.wx[q], self.wy[q - stride], self.wy[q]);
-                let du = &mut self.du;
-                let dv = &mut self.dv;
-                let nu =
-                    wl * du[q - 1] + wr * du[q + 1] + wu * du[q - stride] + wd * du[q + stride];
-                let nv =
-                    wl * dv[q - 1] + wr * dv[q + 1] + wu * dv[q - stride] + wd * dv[q + stride];
-                let a12 = self.a12[q];
-                let target_u = (self.rhs_u[q] + nu - a12 * dv[q]) * self.inv_diag_u[q];
-                du[q] += omega * (target_u - du[q]);
-                let target_v = (self.rhs_v[q] + nv - a12 * du[q]) * self.inv_diag_v[q];
-                dv[q] += omega * (target_v - dv[q]);
+            // Column x = 1 opens the padded row; start at the first pixel of this colour.
+            let first = y * stride + 1 + usize::from((1 + y) % 2 != colour);
+            for q in (first..y * stride + 1 + self.w).step_by(2) {
+                let c = self.coefficients[q];
+                let (wl, wu) = (
+                    self.coefficients[q - 1].wx,
+                    self.coefficients[q - stride].wy,
+                );
+                let d = &self.increment;
+                let (l, r, up, down) = (d[q - 1], d[q + 1], d[q - stride], d[q + stride]);
+                let nu = (wl * l[0] + c.wx * r[0]) + (wu * up[0] + c.wy * down[0]);
+                let nv = (wl * l[1] + c.wx * r[1]) + (wu * up[1] + c.wy * down[1]);
+                let [du, dv] = d[q];
+                let du = du + omega * ((c.rhs_u + nu - c.a12 * dv) * c.inv_u - du);
+                let dv = dv + omega * ((c.rhs_v + nv - c.a12 * du) * c.inv_v - dv);
+                self.increment[q] = [du, dv];
             }
         }
     }
