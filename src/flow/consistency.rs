@@ -69,7 +69,7 @@ mod tests {
         let backward = Grid::filled(10, 6, [-2.0, 0.0]);
         let mask = forward_backward_mask(&forward, &backward, 0.5, 0.0).unwrap();
         // x + 2 leaves the image for the last two columns.
-        assert!(mask.get(7, 3) & !mask.get(8, 3) & !mask.get(9, 0));
+        assert!(*mask.get(7, 3) && !mask.get(8, 3) && !mask.get(9, 0));
         assert_eq!(mask.data().iter().filter(|&&m| m).count(), 8 * 6);
     }
 
@@ -90,7 +90,7 @@ mod tests {
         let mut holey = backward.clone();
         *holey.get_mut(4, 4) = [f32::NAN; 2];
         let mask = forward_backward_mask(&forward, &holey, 5.0, 0.0).unwrap();
-        assert!(!mask.get(1, 4) && mask.get(0, 0));
+        assert!(!mask.get(1, 4) && *mask.get(0, 0));
         assert!(forward_backward_mask(&forward, &Grid::filled(4, 4, [0.0; 2]), 1.0, 0.0).is_err());
     }
 }

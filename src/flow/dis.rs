@@ -2,8 +2,8 @@
 //! Search", ECCV 2016), laid out as OpenCV's `DISOpticalFlow` does it.
 //!
 //! Coarse to fine over a grey pyramid ([`super::pyramid`]); on each level:
-//! 1. a grid of square patches of frame 1 (side `patch_size`, every `patch_stride` pixels) each
-//!    starts from the coarser level's flow at its centre;
+//! 1. a grid of 8 × 8 patches of frame 1 (every `patch_stride` pixels) each starts from the
+//!    coarser level's flow at its centre;
 //! 2. two sweeps over the grid (forward raster order, then backward) let each patch adopt a
 //!    neighbour's displacement when that one matches better (spatial propagation), then refine it
 //!    by inverse-compositional Gauss–Newton on mean-normalised patches (the template's gradient
@@ -58,11 +58,13 @@ impl Preset {
     }
 }
 
+/// Side of the square patches in pixels of each level: 8, as in every preset of OpenCV and of
+/// the DIS paper. Fixed so the patch loops work on `[f32; 8]` rows the compiler vectorises.
+pub const PATCH: usize = 8;
+
 /// Parameters of DIS.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct DisParams {
-    /// Side of the square patches, in pixels of each level.
-    pub patch_size: usize,
     /// Distance between neighbouring patch origins, in pixels.
     pub patch_stride: usize,
     /// Finest pyramid level computed (0 = full resolution); the result is upsampled from there.
@@ -89,7 +91,6 @@ impl DisParams {
             Preset::High => (2, 0, 32, 0.2),
         };
         DisParams {
-            patch_size: 8,
             patch_stride,
             finest_level,
             iterations,
@@ -101,13 +102,10 @@ impl DisParams {
     /// Fails with [`Error::InvalidParameter`] for values the algorithm cannot run with.
     pub fn validate(&self) -> Result<()> {
         let bad = |what: String| Err(Error::InvalidParameter(what));
-        if !(2..=32).contains(&self.patch_size) {
-            return bad(format!("patch size {} is outside 2..=32", self.patch_size));
-        }
-        if self.patch_stride == 0 || self.patch_stride > self.patch_size {
+        if self.patch_stride == 0 || self.patch_stride > PATCH {
             return bad(format!(
-                "patch stride {} must be between 1 and the patch size {}",
-                self.patch_stride, self.patch_size
+                "patch stride {} must be between 1 and the patch size {PATCH}",
+                self.patch_stride
             ));
         }
         if !(self.step_scale > 0.0 && self.step_scale <= 1.0) {
@@ -131,7 +129,7 @@ impl Default for DisParams {
 /// is as OpenCV chooses it: about log₂(long side / 4 patches), and never so coarse that the short
 /// side holds less than one patch. `None` when even level 0 is smaller than a patch.
 pub fn levels(width: usize, height: usize, params: &DisParams) -> Option<(usize, usize)> {
-    let ps = params.patch_size;
+    let ps = PATCH;
     if width.min(height) < ps {
         return None;
     }
@@ -185,64 +183,95 @@ pub fn dis_flow(
 }
 
 /// Frame 2 of a level with a replicated border, so a patch displaced anywhere (its origin
-/// clamped to at most `patch_size − 1` pixels outside the image) samples without coordinate
-/// checks.
+/// clamped to at most [`PATCH`] − 1 pixels outside the image) samples without coordinate checks.
 struct PaddedImage {
     data: Vec<f32>,
-    /// Row length of `data`: width + 2·pad.
+    /// Row length of `data`: width + 2·[`PADDING`].
     stride: usize,
-    pad: usize,
     width: usize,
     height: usize,
 }
 
+/// Border added on each side of [`PaddedImage`]: a patch plus the bilinear neighbour.
+const PADDING: usize = PATCH + 1;
+
 impl PaddedImage {
-    fn new(level: &Level, pad: usize) -> Self {
+    fn new(level: &Level) -> Self {
         let (w, h) = (level.width, level.height);
-        let stride = w + 2 * pad;
-        let mut data = Vec::with_capacity(stride * (h + 2 * pad));
-        for py in 0..h + 2 * pad {
-            let row = &level.pixels[py.saturating_sub(pad).min(h - 1) * w..][..w];
-            data.extend(std::iter::repeat_n(row[0], pad));
+        let stride = w + 2 * PADDING;
+        let mut data = Vec::with_capacity(stride * (h + 2 * PADDING));
+        for py in 0..h + 2 * PADDING {
+            let row = &level.pixels[py.saturating_sub(PADDING).min(h - 1) * w..][..w];
+            data.extend(std::iter::repeat_n(row[0], PADDING));
             data.extend_from_slice(row);
-            data.extend(std::iter::repeat_n(row[w - 1], pad));
+            data.extend(std::iter::repeat_n(row[w - 1], PADDING));
         }
         PaddedImage {
             data,
             stride,
-            pad,
             width: w,
             height: h,
         }
     }
 
-    /// Where a patch with origin (x, y) displaced by `d` reads: the index in `data` of its top-left
-    /// sample and the bilinear weights `[w00, w01, w10, w11]` (top-left, top-right, bottom-left,
-    /// bottom-right), the same for every pixel of the patch.
+    /// The rows a patch with origin (x, y) displaced by `d` reads and its bilinear weights.
     #[inline]
-    fn locate(&self, x: usize, y: usize, d: [f32; 2], ps: usize) -> (usize, [f32; 4]) {
-        let lo = -(ps as f32 - 1.0);
+    fn window(&self, x: usize, y: usize, d: [f32; 2]) -> Window<'_> {
+        let lo = 1.0 - PATCH as f32;
         let ox = (x as f32 + d[0]).clamp(lo, (self.width - 1) as f32);
         let oy = (y as f32 + d[1]).clamp(lo, (self.height - 1) as f32);
         // Shifted into the padding the coordinates are positive, so truncation is the floor.
-        let (px, py) = (ox + self.pad as f32, oy + self.pad as f32);
+        let (px, py) = (ox + PADDING as f32, oy + PADDING as f32);
         let (ix, iy) = (px as usize, py as usize);
         let (ax, ay) = (px - ix as f32, py - iy as f32);
-        let weights = [
-            (1.0 - ax) * (1.0 - ay),
-            ax * (1.0 - ay),
-            (1.0 - ax) * ay,
-            ax * ay,
-        ];
-        (iy * self.stride + ix, weights)
+        Window {
+            image: self,
+            start: iy * self.stride + ix,
+            weights: [
+                (1.0 - ax) * (1.0 - ay),
+                ax * (1.0 - ay),
+                (1.0 - ax) * ay,
+                ax * ay,
+            ],
+        }
     }
+}
+
+/// Where a displaced patch reads frame 2: its top-left sample in [`PaddedImage::data`] and the
+/// bilinear weights `[top-left, top-right, bottom-left, bottom-right]`, the same for every pixel.
+struct Window<'a> {
+    image: &'a PaddedImage,
+    start: usize,
+    weights: [f32; 4],
+}
+
+impl Window<'_> {
+    /// Row `r` of the patch sampled from frame 2.
+    #[inline(always)]
+    fn row(&self, r: usize) -> [f32; PATCH] {
+        let stride = self.image.stride;
+        let top = &self.image.data[self.start + r * stride..][..PATCH + 1];
+        let bottom = &self.image.data[self.start + (r + 1) * stride..][..PATCH + 1];
+        let [w00, w01, w10, w11] = self.weights;
+        let mut out = [0.0; PATCH];
+        for (c, o) in out.iter_mut().enumerate() {
+            *o = w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
+        }
+        out
+    }
+}
+
+/// Row `r` of the 8 × 8 patch with origin (x, y) of a flat image of width `w`.
+#[inline]
+fn patch_row(image: &[f32], w: usize, x: usize, y: usize, r: usize) -> &[f32] {
+    let at = (y + r) * w + x;
+    &image[at..at + PATCH]
 }
 
 /// One level's patch grid with everything about frame 1 that Gauss–Newton reuses.
 struct PatchSearch<'a> {
     from: &'a Level,
     to: PaddedImage,
-    ps: usize,
     /// Share of each Gauss–Newton step taken ([`DisParams::step_scale`]).
     step_scale: f32,
     /// Patch origins (top-left pixel) along x and along y.
@@ -262,20 +291,22 @@ const HESSIAN_FLOOR: f32 = 0.1;
 /// A Gauss–Newton step shorter than this (pixels) ends a patch's iterations.
 const CONVERGED_STEP: f32 = 0.01;
 
+/// Pixels in a patch, as a float.
+const PIXELS: f32 = (PATCH * PATCH) as f32;
+
 impl<'a> PatchSearch<'a> {
     fn new(from: &'a Level, to: &Level, params: &DisParams) -> Self {
-        let (ps, stride) = (params.patch_size, params.patch_stride);
-        let xs = origins(from.width, ps, stride);
-        let ys = origins(from.height, ps, stride);
-        let n = (ps * ps) as f32;
+        let xs = origins(from.width, params.patch_stride);
+        let ys = origins(from.height, params.patch_stride);
         let mut inv_hessian = Vec::with_capacity(xs.len() * ys.len());
         let mut grad_sum = Vec::with_capacity(xs.len() * ys.len());
         for &y0 in &ys {
             for &x0 in &xs {
                 let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
-                for y in y0..y0 + ps {
-                    let row = y * from.width + x0;
-                    for (&gx, &gy) in from.gx[row..row + ps].iter().zip(&from.gy[row..row + ps]) {
+                for r in 0..PATCH {
+                    let gx = patch_row(&from.gx, from.width, x0, y0, r);
+                    let gy = patch_row(&from.gy, from.width, x0, y0, r);
+                    for (&gx, &gy) in gx.iter().zip(gy) {
                         sx += gx;
                         sy += gy;
                         sxx += gx * gx;
@@ -284,9 +315,9 @@ impl<'a> PatchSearch<'a> {
                     }
                 }
                 // Hessian of the mean-normalised residual: the gradients minus their mean.
-                let a = sxx - sx * sx / n + HESSIAN_FLOOR * n;
-                let b = sxy - sx * sy / n;
-                let c = syy - sy * sy / n + HESSIAN_FLOOR * n;
+                let a = sxx - sx * sx / PIXELS + HESSIAN_FLOOR * PIXELS;
+                let b = sxy - sx * sy / PIXELS;
+                let c = syy - sy * sy / PIXELS + HESSIAN_FLOOR * PIXELS;
                 let det = a * c - b * b;
                 inv_hessian.push([c / det, -b / det, a / det]);
                 grad_sum.push([sx, sy]);
@@ -294,8 +325,7 @@ impl<'a> PatchSearch<'a> {
         }
         PatchSearch {
             from,
-            to: PaddedImage::new(to, ps + 1),
-            ps,
+            to: PaddedImage::new(to),
             step_scale: params.step_scale,
             xs,
             ys,
@@ -304,13 +334,19 @@ impl<'a> PatchSearch<'a> {
         }
     }
 
+    /// Origin of patch `k`.
+    #[inline]
+    fn origin(&self, k: usize) -> (usize, usize) {
+        let nx = self.xs.len();
+        (self.xs[k % nx], self.ys[k / nx])
+    }
+
     /// Patch displacements: each patch starts from the dense initial field (u0, v0) at its
     /// centre, then two propagation sweeps with Gauss–Newton refinement.
     fn run(&self, u0: &[f32], v0: &[f32], iterations: usize) -> Vec<[f32; 2]> {
         let (nx, ny) = (self.xs.len(), self.ys.len());
-        let w = self.from.width;
-        let h = self.from.height;
-        let centre = (self.ps as f32 - 1.0) / 2.0;
+        let (w, h) = (self.from.width, self.from.height);
+        let centre = (PATCH as f32 - 1.0) / 2.0;
         let mut flow = Vec::with_capacity(nx * ny);
         for &y0 in &self.ys {
             for &x0 in &self.xs {
@@ -373,16 +409,16 @@ impl<'a> PatchSearch<'a> {
         }
         let refined = self.descend(k, start, iterations);
         let (mx, my) = (refined[0] - start[0], refined[1] - start[1]);
-        if mx * mx + my * my <= (self.ps * self.ps) as f32 {
+        if mx * mx + my * my <= (PATCH * PATCH) as f32 {
             refined
         } else {
             start
         }
     }
 
-    /// Inverse-compositional Gauss–Newton from `start`: each step solves with the patch's fixed
-    /// Hessian; stops when a step is tiny, or when the SSD stops falling (then returns the best
-    /// point seen).
+    /// Inverse-compositional Gauss–Newton from `start`: each step, scaled by `step_scale`,
+    /// solves with the patch's fixed Hessian; stops when a step is tiny, or when the SSD stops
+    /// falling (then returns the best point seen).
     fn descend(&self, k: usize, start: [f32; 2], iterations: usize) -> [f32; 2] {
         let [a, b, c] = self.inv_hessian[k];
         let mut d = start;
@@ -408,61 +444,55 @@ impl<'a> PatchSearch<'a> {
     /// Mean-normalised SSD between patch `k` of frame 1 and frame 2 displaced by `d`, and the
     /// Gauss–Newton gradient Σ (g − ḡ)·r of the template gradients g against the residual r.
     fn residual(&self, k: usize, d: [f32; 2]) -> (f32, f32, f32) {
-        let ps = self.ps;
-        let nx = self.xs.len();
-        let (x0, y0) = (self.xs[k % nx], self.ys[k / nx]);
-        let (start, weights) = self.to.locate(x0, y0, d, ps);
-        let stride = self.to.stride;
+        let (x0, y0) = self.origin(k);
+        let window = self.to.window(x0, y0, d);
         let w = self.from.width;
-        // Four independent lanes per sum: the loop vectorises and its order is fixed.
-        let mut acc = Lanes::default();
-        for r in 0..ps {
-            let top = &self.to.data[start + r * stride..][..ps + 1];
-            let bottom = &self.to.data[start + (r + 1) * stride..][..ps + 1];
-            let at = (y0 + r) * w + x0;
-            acc.add_row(
-                [&top[..ps], &top[1..], &bottom[..ps], &bottom[1..]],
-                weights,
-                &self.from.pixels[at..at + ps],
-                &self.from.gx[at..at + ps],
-                &self.from.gy[at..at + ps],
-            );
+        // Partial sums in four lanes (column c and c + 4 share lane c): the loop vectorises,
+        // stays within the registers, and its order is fixed.
+        let (mut sum, mut sq, mut bx, mut by) = ([0.0f32; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+        for r in 0..PATCH {
+            let sample = window.row(r);
+            let template = patch_row(&self.from.pixels, w, x0, y0, r);
+            let gx = patch_row(&self.from.gx, w, x0, y0, r);
+            let gy = patch_row(&self.from.gy, w, x0, y0, r);
+            for c in 0..4 {
+                let (a, b) = (sample[c] - template[c], sample[c + 4] - template[c + 4]);
+                sum[c] += a + b;
+                sq[c] += a * a + b * b;
+                bx[c] += gx[c] * a + gx[c + 4] * b;
+                by[c] += gy[c] * a + gy[c + 4] * b;
+            }
         }
-        let n = (ps * ps) as f32;
-        let [s, q, bx, by] = acc.totals();
+        let [s, q, bx, by] = [sum, sq, bx, by].map(total);
         let [gsx, gsy] = self.grad_sum[k];
-        ((q - s * s / n).max(0.0), bx - s * gsx / n, by - s * gsy / n)
+        let ssd = (q - s * s / PIXELS).max(0.0);
+        (ssd, bx - s * gsx / PIXELS, by - s * gsy / PIXELS)
     }
 
     /// The dense field: every pixel averages the displacements of the patches covering it, each
     /// weighted by 1 / max(1, |I₂(x + d) − I₁(x)|).
     fn densify(&self, flow: &[[f32; 2]]) -> (Vec<f32>, Vec<f32>) {
         let (w, h) = (self.from.width, self.from.height);
-        let ps = self.ps;
-        let nx = self.xs.len();
         let mut su = vec![0.0f32; w * h];
         let mut sv = vec![0.0f32; w * h];
         let mut sw = vec![0.0f32; w * h];
         for (k, &d) in flow.iter().enumerate() {
-            let (x0, y0) = (self.xs[k % nx], self.ys[k / nx]);
-            let (start, [w00, w01, w10, w11]) = self.to.locate(x0, y0, d, ps);
-            for r in 0..ps {
-                let top = &self.to.data[start + r * self.to.stride..][..ps + 1];
-                let bottom = &self.to.data[start + (r + 1) * self.to.stride..][..ps + 1];
+            let (x0, y0) = self.origin(k);
+            let window = self.to.window(x0, y0, d);
+            for r in 0..PATCH {
+                let sample = window.row(r);
+                let template = patch_row(&self.from.pixels, w, x0, y0, r);
                 let at = (y0 + r) * w + x0;
-                let template = &self.from.pixels[at..at + ps];
-                let (su, sv, sw) = (
-                    &mut su[at..at + ps],
-                    &mut sv[at..at + ps],
-                    &mut sw[at..at + ps],
+                let rows = (
+                    &mut su[at..at + PATCH],
+                    &mut sv[at..at + PATCH],
+                    &mut sw[at..at + PATCH],
                 );
-                for c in 0..ps {
-                    let sample =
-                        w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
-                    let weight = 1.0 / (sample - template[c]).abs().max(1.0);
-                    su[c] += weight * d[0];
-                    sv[c] += weight * d[1];
-                    sw[c] += weight;
+                for (c, ((u, v), s)) in rows.0.iter_mut().zip(rows.1).zip(rows.2).enumerate() {
+                    let weight = 1.0 / (sample[c] - template[c]).abs().max(1.0);
+                    *u += weight * d[0];
+                    *v += weight * d[1];
+                    *s += weight;
                 }
             }
         }
@@ -475,69 +505,16 @@ impl<'a> PatchSearch<'a> {
     }
 }
 
-/// Partial sums of one residual evaluation in four lanes each: Σr, Σr², Σgx·r, Σgy·r over the
-/// pixels of a patch, r = bilinear sample of frame 2 − template.
-#[derive(Default)]
-struct Lanes {
-    sum: [f32; 4],
-    sq: [f32; 4],
-    bx: [f32; 4],
-    by: [f32; 4],
+/// Sum of four partial sums in a fixed pairwise order.
+#[inline]
+fn total(lanes: [f32; 4]) -> f32 {
+    (lanes[0] + lanes[2]) + (lanes[1] + lanes[3])
 }
 
-impl Lanes {
-    /// Adds one patch row: `corners` are the frame-2 rows at the four bilinear taps (top-left,
-    /// top-right, bottom-left, bottom-right), each as long as the template row.
-    #[inline]
-    fn add_row(
-        &mut self,
-        corners: [&[f32]; 4],
-        [w00, w01, w10, w11]: [f32; 4],
-        template: &[f32],
-        gx: &[f32],
-        gy: &[f32],
-    ) {
-        let [tl, tr, bl, br] = corners.map(|c| c.as_chunks::<4>());
-        let (t, t_rest) = template.as_chunks::<4>();
-        let (gx4, gx_rest) = gx.as_chunks::<4>();
-        let (gy4, gy_rest) = gy.as_chunks::<4>();
-        let quads = t
-            .len()
-            .min(tl.0.len())
-            .min(tr.0.len())
-            .min(bl.0.len())
-            .min(br.0.len());
-        for i in 0..quads.min(gx4.len()).min(gy4.len()) {
-            for l in 0..4 {
-                let sample =
-                    w00 * tl.0[i][l] + w01 * tr.0[i][l] + w10 * bl.0[i][l] + w11 * br.0[i][l];
-                let r = sample - t[i][l];
-                self.sum[l] += r;
-                self.sq[l] += r * r;
-                self.bx[l] += gx4[i][l] * r;
-                self.by[l] += gy4[i][l] * r;
-            }
-        }
-        for (j, ((&t, &gx), &gy)) in t_rest.iter().zip(gx_rest).zip(gy_rest).enumerate() {
-            let sample = w00 * tl.1[j] + w01 * tr.1[j] + w10 * bl.1[j] + w11 * br.1[j];
-            let r = sample - t;
-            self.sum[0] += r;
-            self.sq[0] += r * r;
-            self.bx[0] += gx * r;
-            self.by[0] += gy * r;
-        }
-    }
-
-    /// `[Σr, Σr², Σgx·r, Σgy·r]`.
-    fn totals(&self) -> [f32; 4] {
-        [self.sum, self.sq, self.bx, self.by].map(|l| (l[0] + l[1]) + (l[2] + l[3]))
-    }
-}
-
-/// Patch origins along an axis of `len` pixels: every `stride`, plus the last one that fits, so
-/// every pixel is covered.
-fn origins(len: usize, patch: usize, stride: usize) -> Vec<usize> {
-    let last = len - patch;
+/// Patch origins along an axis of `len` ≥ [`PATCH`] pixels: every `stride`, plus the last one
+/// that fits, so every pixel is covered.
+fn origins(len: usize, stride: usize) -> Vec<usize> {
+    let last = len - PATCH;
     let mut out: Vec<usize> = (0..=last).step_by(stride).collect();
     if out.last() != Some(&last) {
         out.push(last);
@@ -551,9 +528,9 @@ mod tests {
 
     #[test]
     fn origins_cover_the_axis() {
-        assert_eq!(origins(20, 8, 3), vec![0, 3, 6, 9, 12]);
-        assert_eq!(origins(21, 8, 3), vec![0, 3, 6, 9, 12, 13]);
-        assert_eq!(origins(8, 8, 3), vec![0]);
+        assert_eq!(origins(20, 3), vec![0, 3, 6, 9, 12]);
+        assert_eq!(origins(21, 3), vec![0, 3, 6, 9, 12, 13]);
+        assert_eq!(origins(8, 3), vec![0]);
     }
 
     #[test]

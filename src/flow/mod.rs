@@ -126,7 +126,7 @@ pub struct FlowPair {
 /// the work done, in [0, 1].
 ///
 /// Errors: [`Error::SizeMismatch`] when the frames differ in size, [`Error::TooSmall`] when a
-/// side is shorter than a patch, [`Error::InvalidParameter`] for invalid parameters. Identical
+/// side is shorter than a patch (8 pixels), [`Error::InvalidParameter`] for invalid parameters. Identical
 /// frames give zero flow; textureless frames give a finite (zero) field.
 pub fn compute_flow(
     frame1: &Frame,
@@ -141,7 +141,7 @@ pub fn compute_flow(
         return Err(Error::TooSmall {
             width: w,
             height: h,
-            min: params.dis.patch_size,
+            min: dis::PATCH,
         });
     };
     progress(0.0);
