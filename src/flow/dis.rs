@@ -551,8 +551,15 @@ mod tests {
             DisParams::preset(preset).validate().unwrap();
         }
         assert!(Preset::from_name("slow").is_err());
-        let mut p = DisParams::default();
-        p.patch_stride = 0;
-        assert!(p.validate().is_err());
+        let zero_stride = DisParams {
+            patch_stride: 0,
+            ..Default::default()
+        };
+        assert!(zero_stride.validate().is_err());
+        let long_step = DisParams {
+            step_scale: 1.5,
+            ..Default::default()
+        };
+        assert!(long_step.validate().is_err());
     }
 }
