@@ -15,6 +15,7 @@
 //! The finest level computed is `finest_level`; the caller upsamples from there. Flow at a level
 //! is in pixels of that level; pixel centres at integers, u right, v down.
 
+use super::lanes::F4;
 use super::pyramid::{Level, upsample};
 use super::variational::{VariationalParams, refine};
 use crate::error::{Error, Result};
@@ -246,18 +247,17 @@ struct Window<'a> {
 }
 
 impl Window<'_> {
-    /// Row `r` of the patch sampled from frame 2.
+    /// Columns `c..c + 4` of row `r` of the patch, sampled from frame 2.
     #[inline(always)]
-    fn row(&self, r: usize) -> [f32; PATCH] {
+    fn sample(&self, r: usize, c: usize) -> F4 {
         let stride = self.image.stride;
-        let top = &self.image.data[self.start + r * stride..][..PATCH + 1];
-        let bottom = &self.image.data[self.start + (r + 1) * stride..][..PATCH + 1];
-        let [w00, w01, w10, w11] = self.weights;
-        let mut out = [0.0; PATCH];
-        for (c, o) in out.iter_mut().enumerate() {
-            *o = w00 * top[c] + w01 * top[c + 1] + w10 * bottom[c] + w11 * bottom[c + 1];
-        }
-        out
+        let top = &self.image.data[self.start + r * stride + c..][..5];
+        let bottom = &self.image.data[self.start + (r + 1) * stride + c..][..5];
+        let [w00, w01, w10, w11] = self.weights.map(F4::splat);
+        w00 * F4::load(top)
+            + w01 * F4::load(&top[1..])
+            + w10 * F4::load(bottom)
+            + w11 * F4::load(&bottom[1..])
     }
 }
 
@@ -274,14 +274,21 @@ struct PatchSearch<'a> {
     to: PaddedImage,
     /// Share of each Gauss–Newton step taken ([`DisParams::step_scale`]).
     step_scale: f32,
-    /// Patch origins (top-left pixel) along x and along y.
-    xs: Vec<usize>,
-    ys: Vec<usize>,
-    /// Per patch: inverse of the mean-normalised Gauss–Newton Hessian, `[a, b, c]` of
-    /// [[a, b], [b, c]].
-    inv_hessian: Vec<[f32; 3]>,
-    /// Per patch: sums of the template's x and y gradients (for mean normalisation).
-    grad_sum: Vec<[f32; 2]>,
+    /// Patches per grid row.
+    columns: usize,
+    /// The patches, row by row.
+    patches: Vec<Patch>,
+}
+
+/// One patch of frame 1 and what Gauss–Newton reuses about it.
+struct Patch {
+    /// Top-left pixel.
+    x: usize,
+    y: usize,
+    /// Inverse of the mean-normalised Gauss–Newton Hessian, `[a, b, c]` of [[a, b], [b, c]].
+    inv_hessian: [f32; 3],
+    /// Sums of the template's x and y gradients (for mean normalisation).
+    grad_sum: [f32; 2],
 }
 
 /// Regularisation added to the diagonal of each patch's Hessian, per pixel (grey levels² per
@@ -289,7 +296,7 @@ struct PatchSearch<'a> {
 const HESSIAN_FLOOR: f32 = 0.1;
 
 /// A Gauss–Newton step shorter than this (pixels) ends a patch's iterations.
-const CONVERGED_STEP: f32 = 0.01;
+const CONVERGED_STEP: f32 = 0.03;
 
 /// Pixels in a patch, as a float.
 const PIXELS: f32 = (PATCH * PATCH) as f32;
@@ -298,14 +305,13 @@ impl<'a> PatchSearch<'a> {
     fn new(from: &'a Level, to: &Level, params: &DisParams) -> Self {
         let xs = origins(from.width, params.patch_stride);
         let ys = origins(from.height, params.patch_stride);
-        let mut inv_hessian = Vec::with_capacity(xs.len() * ys.len());
-        let mut grad_sum = Vec::with_capacity(xs.len() * ys.len());
-        for &y0 in &ys {
-            for &x0 in &xs {
+        let mut patches = Vec::with_capacity(xs.len() * ys.len());
+        for &y in &ys {
+            for &x in &xs {
                 let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
                 for r in 0..PATCH {
-                    let gx = patch_row(&from.gx, from.width, x0, y0, r);
-                    let gy = patch_row(&from.gy, from.width, x0, y0, r);
+                    let gx = patch_row(&from.gx, from.width, x, y, r);
+                    let gy = patch_row(&from.gy, from.width, x, y, r);
                     for (&gx, &gy) in gx.iter().zip(gy) {
                         sx += gx;
                         sy += gy;
@@ -319,44 +325,40 @@ impl<'a> PatchSearch<'a> {
                 let b = sxy - sx * sy / PIXELS;
                 let c = syy - sy * sy / PIXELS + HESSIAN_FLOOR * PIXELS;
                 let det = a * c - b * b;
-                inv_hessian.push([c / det, -b / det, a / det]);
-                grad_sum.push([sx, sy]);
+                patches.push(Patch {
+                    x,
+                    y,
+                    inv_hessian: [c / det, -b / det, a / det],
+                    grad_sum: [sx, sy],
+                });
             }
         }
         PatchSearch {
             from,
             to: PaddedImage::new(to),
             step_scale: params.step_scale,
-            xs,
-            ys,
-            inv_hessian,
-            grad_sum,
+            columns: xs.len(),
+            patches,
         }
-    }
-
-    /// Origin of patch `k`.
-    #[inline]
-    fn origin(&self, k: usize) -> (usize, usize) {
-        let nx = self.xs.len();
-        (self.xs[k % nx], self.ys[k / nx])
     }
 
     /// Patch displacements: each patch starts from the dense initial field (u0, v0) at its
     /// centre, then two propagation sweeps with Gauss–Newton refinement.
     fn run(&self, u0: &[f32], v0: &[f32], iterations: usize) -> Vec<[f32; 2]> {
-        let (nx, ny) = (self.xs.len(), self.ys.len());
+        let (nx, ny) = (self.columns, self.patches.len() / self.columns);
         let (w, h) = (self.from.width, self.from.height);
         let centre = (PATCH as f32 - 1.0) / 2.0;
-        let mut flow = Vec::with_capacity(nx * ny);
-        for &y0 in &self.ys {
-            for &x0 in &self.xs {
-                let (cx, cy) = (x0 as f32 + centre, y0 as f32 + centre);
-                flow.push([
+        let mut flow: Vec<[f32; 2]> = self
+            .patches
+            .iter()
+            .map(|p| {
+                let (cx, cy) = (p.x as f32 + centre, p.y as f32 + centre);
+                [
                     super::pyramid::sample_clamped(u0, w, h, cx, cy),
                     super::pyramid::sample_clamped(v0, w, h, cx, cy),
-                ]);
-            }
-        }
+                ]
+            })
+            .collect();
         let first = iterations - iterations / 2;
         // Forward sweep: candidates from the left and upper neighbours.
         for j in 0..ny {
@@ -420,7 +422,7 @@ impl<'a> PatchSearch<'a> {
     /// solves with the patch's fixed Hessian; stops when a step is tiny, or when the SSD stops
     /// falling (then returns the best point seen).
     fn descend(&self, k: usize, start: [f32; 2], iterations: usize) -> [f32; 2] {
-        let [a, b, c] = self.inv_hessian[k];
+        let [a, b, c] = self.patches[k].inv_hessian;
         let mut d = start;
         let mut best = (f32::INFINITY, start);
         for _ in 0..iterations {
@@ -444,27 +446,27 @@ impl<'a> PatchSearch<'a> {
     /// Mean-normalised SSD between patch `k` of frame 1 and frame 2 displaced by `d`, and the
     /// Gauss–Newton gradient Σ (g − ḡ)·r of the template gradients g against the residual r.
     fn residual(&self, k: usize, d: [f32; 2]) -> (f32, f32, f32) {
-        let (x0, y0) = self.origin(k);
+        let patch = &self.patches[k];
+        let (x0, y0) = (patch.x, patch.y);
         let window = self.to.window(x0, y0, d);
         let w = self.from.width;
-        // Partial sums in four lanes (column c and c + 4 share lane c): the loop vectorises,
-        // stays within the registers, and its order is fixed.
-        let (mut sum, mut sq, mut bx, mut by) = ([0.0f32; 4], [0.0; 4], [0.0; 4], [0.0; 4]);
+        // Partial sums in four lanes (columns c and c + 4 share lane c).
+        let (mut sum, mut sq, mut bx, mut by) =
+            (F4::default(), F4::default(), F4::default(), F4::default());
         for r in 0..PATCH {
-            let sample = window.row(r);
             let template = patch_row(&self.from.pixels, w, x0, y0, r);
             let gx = patch_row(&self.from.gx, w, x0, y0, r);
             let gy = patch_row(&self.from.gy, w, x0, y0, r);
-            for c in 0..4 {
-                let (a, b) = (sample[c] - template[c], sample[c + 4] - template[c + 4]);
-                sum[c] += a + b;
-                sq[c] += a * a + b * b;
-                bx[c] += gx[c] * a + gx[c + 4] * b;
-                by[c] += gy[c] * a + gy[c + 4] * b;
+            for c in [0, 4] {
+                let residual = window.sample(r, c) - F4::load(&template[c..]);
+                sum += residual;
+                sq += residual * residual;
+                bx += F4::load(&gx[c..]) * residual;
+                by += F4::load(&gy[c..]) * residual;
             }
         }
-        let [s, q, bx, by] = [sum, sq, bx, by].map(total);
-        let [gsx, gsy] = self.grad_sum[k];
+        let [s, q, bx, by] = [sum, sq, bx, by].map(F4::sum);
+        let [gsx, gsy] = patch.grad_sum;
         let ssd = (q - s * s / PIXELS).max(0.0);
         (ssd, bx - s * gsx / PIXELS, by - s * gsy / PIXELS)
     }
@@ -476,23 +478,25 @@ impl<'a> PatchSearch<'a> {
         let mut su = vec![0.0f32; w * h];
         let mut sv = vec![0.0f32; w * h];
         let mut sw = vec![0.0f32; w * h];
-        for (k, &d) in flow.iter().enumerate() {
-            let (x0, y0) = self.origin(k);
+        for (patch, &d) in self.patches.iter().zip(flow) {
+            let (x0, y0) = (patch.x, patch.y);
             let window = self.to.window(x0, y0, d);
             for r in 0..PATCH {
-                let sample = window.row(r);
                 let template = patch_row(&self.from.pixels, w, x0, y0, r);
                 let at = (y0 + r) * w + x0;
-                let rows = (
-                    &mut su[at..at + PATCH],
-                    &mut sv[at..at + PATCH],
-                    &mut sw[at..at + PATCH],
-                );
-                for (c, ((u, v), s)) in rows.0.iter_mut().zip(rows.1).zip(rows.2).enumerate() {
-                    let weight = 1.0 / (sample[c] - template[c]).abs().max(1.0);
-                    *u += weight * d[0];
-                    *v += weight * d[1];
-                    *s += weight;
+                for c in [0, 4] {
+                    let sample = window.sample(r, c).0;
+                    let rows = (
+                        &mut su[at + c..at + c + 4],
+                        &mut sv[at + c..at + c + 4],
+                        &mut sw[at + c..at + c + 4],
+                    );
+                    for (i, ((u, v), s)) in rows.0.iter_mut().zip(rows.1).zip(rows.2).enumerate() {
+                        let weight = 1.0 / (sample[i] - template[c + i]).abs().max(1.0);
+                        *u += weight * d[0];
+                        *v += weight * d[1];
+                        *s += weight;
+                    }
                 }
             }
         }
@@ -503,12 +507,6 @@ impl<'a> PatchSearch<'a> {
         }
         (su, sv)
     }
-}
-
-/// Sum of four partial sums in a fixed pairwise order.
-#[inline]
-fn total(lanes: [f32; 4]) -> f32 {
-    (lanes[0] + lanes[2]) + (lanes[1] + lanes[3])
 }
 
 /// Patch origins along an axis of `len` ≥ [`PATCH`] pixels: every `stride`, plus the last one

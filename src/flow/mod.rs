@@ -12,6 +12,7 @@
 pub mod colour;
 pub mod consistency;
 pub mod dis;
+mod lanes;
 pub mod pyramid;
 pub mod variational;
 
