@@ -35,21 +35,24 @@ pub fn forward_backward_mask(
 
 /// Bilinear sample of a flow field at (x, y); `None` outside [0, w − 1] × [0, h − 1] or when a
 /// vector it mixes is unknown.
+#[inline]
 fn sample_flow(flow: &FlowField, x: f32, y: f32) -> Option<[f32; 2]> {
     let (w, h) = flow.size();
     if !(x >= 0.0 && y >= 0.0 && x <= (w - 1) as f32 && y <= (h - 1) as f32) {
         return None;
     }
-    let (x0, y0, ax, ay) = crate::grid::bilinear_cell(x, y, w, h);
+    // Non-negative here, so truncation is the floor.
+    let (x0, y0) = (x as usize, y as usize);
+    let (ax, ay) = (x - x0 as f32, y - y0 as f32);
     let (x1, y1) = ((x0 + 1).min(w - 1), (y0 + 1).min(h - 1));
+    let corners = [
+        (*flow.get(x0, y0), (1.0 - ax) * (1.0 - ay)),
+        (*flow.get(x1, y0), ax * (1.0 - ay)),
+        (*flow.get(x0, y1), (1.0 - ax) * ay),
+        (*flow.get(x1, y1), ax * ay),
+    ];
     let mut out = [0.0f32; 2];
-    for (xx, yy, weight) in [
-        (x0, y0, (1.0 - ax) * (1.0 - ay)),
-        (x1, y0, ax * (1.0 - ay)),
-        (x0, y1, (1.0 - ax) * ay),
-        (x1, y1, ax * ay),
-    ] {
-        let v = *flow.get(xx, yy);
+    for (v, weight) in corners {
         if !is_known(v) {
             return None;
         }

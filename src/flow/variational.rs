@@ -155,18 +155,20 @@ fn data_terms(from: &Level, to: &Level, u: &[f32], v: &[f32]) -> Vec<Constancy> 
     terms
 }
 
-/// (∂/∂x, ∂/∂y) of a `w × h` field by central differences, one-sided at the borders.
+/// (∂/∂x, ∂/∂y) of a `w × h` field (w, h ≥ 2) by central differences, one-sided at the
+/// borders.
 fn central_differences(f: &[f32], w: usize, h: usize) -> (Vec<f32>, Vec<f32>) {
     let mut dx = Vec::with_capacity(w * h);
     let mut dy = Vec::with_capacity(w * h);
     for y in 0..h {
+        let row = &f[y * w..][..w];
+        dx.push(row[1] - row[0]);
+        dx.extend(row.windows(3).map(|t| 0.5 * (t[2] - t[0])));
+        dx.push(row[w - 1] - row[w - 2]);
         let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
-        let sy = 1.0 / (down - up) as f32;
-        for x in 0..w {
-            let (l, r) = (x.saturating_sub(1), (x + 1).min(w - 1));
-            dx.push((f[y * w + r] - f[y * w + l]) / (r - l) as f32);
-            dy.push((f[down * w + x] - f[up * w + x]) * sy);
-        }
+        let scale = 1.0 / (down - up) as f32;
+        let (above, below) = (&f[up * w..][..w], &f[down * w..][..w]);
+        dy.extend(above.iter().zip(below).map(|(a, b)| (b - a) * scale));
     }
     (dx, dy)
 }
@@ -230,38 +232,52 @@ impl System {
             (0.5 * params.alpha, 0.5 * params.delta, 0.5 * params.gamma);
         let (w, h) = (self.w, self.h);
         let stride = w + 2;
-        let total = |s: &Self, q: usize| {
-            let (f, d) = (s.flow[q], s.increment[q]);
-            [f[0] + d[0], f[1] + d[1]]
-        };
+        let System {
+            flow,
+            increment,
+            coefficients,
+            ..
+        } = self;
         for y in 1..=h {
+            let row = y * stride;
+            let (flow_up, flow_mid, flow_down) = (
+                &flow[row - stride..][..stride],
+                &flow[row..][..stride],
+                &flow[row + stride..][..stride],
+            );
+            let (increment_mid, increment_down) = (
+                &increment[row..][..stride],
+                &increment[row + stride..][..stride],
+            );
+            let terms = &terms[row..][..stride];
+            let (above, rest) = coefficients.split_at_mut(row);
+            let (coefficients_up, coefficients_mid) = (&above[row - stride..], &mut rest[..stride]);
+            // Weight of the edge to the left neighbour: the previous pixel's right edge.
+            let mut wl = 0.0;
             for x in 1..=w {
-                let q = y * stride + x;
-                let here = total(self, q);
-                let (right, down) = (total(self, q + 1), total(self, q + stride));
-                let (dx, dy) = (x < w, y < h);
-                let gx = if dx {
+                let total = |f: [f32; 2], d: [f32; 2]| [f[0] + d[0], f[1] + d[1]];
+                let here = total(flow_mid[x], increment_mid[x]);
+                let right = total(flow_mid[x + 1], increment_mid[x + 1]);
+                let down = total(flow_down[x], increment_down[x]);
+                let (has_right, has_down) = (x < w, y < h);
+                let gx = if has_right {
                     [right[0] - here[0], right[1] - here[1]]
                 } else {
                     [0.0; 2]
                 };
-                let gy = if dy {
+                let gy = if has_down {
                     [down[0] - here[0], down[1] - here[1]]
                 } else {
                     [0.0; 2]
                 };
-                let psi = half_alpha
-                    / (gx[0] * gx[0] + gx[1] * gx[1] + gy[0] * gy[0] + gy[1] * gy[1] + EPSILON_SQ)
-                        .sqrt();
-                let wr = if dx { psi } else { 0.0 };
-                let wd = if dy { psi } else { 0.0 };
-                let (wl, wu) = (
-                    self.coefficients[q - 1].wx,
-                    self.coefficients[q - stride].wy,
-                );
+                let gradient = gx[0] * gx[0] + gx[1] * gx[1] + gy[0] * gy[0] + gy[1] * gy[1];
+                let psi = half_alpha / (gradient + EPSILON_SQ).sqrt();
+                let wr = if has_right { psi } else { 0.0 };
+                let wd = if has_down { psi } else { 0.0 };
+                let wu = coefficients_up[x].wy;
 
-                let t = &terms[q];
-                let [du, dv] = self.increment[q];
+                let t = &terms[x];
+                let [du, dv] = increment_mid[x];
                 let r = t[2] + t[0] * du + t[1] * dv;
                 let wb = half_delta / (r * r + EPSILON_SQ).sqrt();
                 let rx = t[5] + t[3] * du + t[4] * dv;
@@ -273,21 +289,28 @@ impl System {
                 let b1 = -wb * t[2] * t[0] - wg * (t[5] * t[3] + t[8] * t[6]);
                 let b2 = -wb * t[2] * t[1] - wg * (t[5] * t[4] + t[8] * t[7]);
 
-                let f = &self.flow;
-                let pull = |c: usize| {
-                    (wl * (f[q - 1][c] - f[q][c]) + wr * (f[q + 1][c] - f[q][c]))
-                        + (wu * (f[q - stride][c] - f[q][c]) + wd * (f[q + stride][c] - f[q][c]))
-                };
+                let (f, l, r, u, d) = (
+                    flow_mid[x],
+                    flow_mid[x - 1],
+                    flow_mid[x + 1],
+                    flow_up[x],
+                    flow_down[x],
+                );
+                let pull_u = (wl * (l[0] - f[0]) + wr * (r[0] - f[0]))
+                    + (wu * (u[0] - f[0]) + wd * (d[0] - f[0]));
+                let pull_v = (wl * (l[1] - f[1]) + wr * (r[1] - f[1]))
+                    + (wu * (u[1] - f[1]) + wd * (d[1] - f[1]));
                 let sum = (wl + wr) + (wu + wd);
-                self.coefficients[q] = Coefficients {
+                coefficients_mid[x] = Coefficients {
                     wx: wr,
                     wy: wd,
                     a12,
-                    rhs_u: b1 + pull(0),
-                    rhs_v: b2 + pull(1),
+                    rhs_u: b1 + pull_u,
+                    rhs_v: b2 + pull_v,
                     inv_u: 1.0 / (a11 + sum),
                     inv_v: 1.0 / (a22 + sum),
                 };
+                wl = wr;
             }
         }
     }
