@@ -280,6 +280,9 @@ struct PatchSearch<'a> {
     patches: Vec<Patch>,
 }
 
+/// A patch's mean-normalised SSD and Gauss–Newton gradient (x, y) at one displacement.
+type Residual = (f32, f32, f32);
+
 /// One patch of frame 1 and what Gauss–Newton reuses about it.
 struct Patch {
     /// Top-left pixel.
@@ -392,24 +395,20 @@ impl<'a> PatchSearch<'a> {
         iterations: usize,
     ) -> [f32; 2] {
         let mut start = current;
-        let mut start_ssd = None;
+        // The residual at `start`, once evaluated: Gauss–Newton reuses it as its first step.
+        let mut at_start: Option<Residual> = None;
         for candidate in candidates.into_iter().flatten() {
             if candidate == start {
                 continue;
             }
-            let ssd_start = match start_ssd {
-                Some(s) => s,
-                None => self.residual(k, start).0,
-            };
-            let ssd = self.residual(k, candidate).0;
-            if ssd < ssd_start {
+            let current = *at_start.get_or_insert_with(|| self.residual(k, start));
+            let other = self.residual(k, candidate);
+            if other.0 < current.0 {
                 start = candidate;
-                start_ssd = Some(ssd);
-            } else {
-                start_ssd = Some(ssd_start);
+                at_start = Some(other);
             }
         }
-        let refined = self.descend(k, start, iterations);
+        let refined = self.descend(k, start, at_start, iterations);
         let (mx, my) = (refined[0] - start[0], refined[1] - start[1]);
         if mx * mx + my * my <= (PATCH * PATCH) as f32 {
             refined
@@ -418,15 +417,21 @@ impl<'a> PatchSearch<'a> {
         }
     }
 
-    /// Inverse-compositional Gauss–Newton from `start`: each step, scaled by `step_scale`,
-    /// solves with the patch's fixed Hessian; stops when a step is tiny, or when the SSD stops
-    /// falling (then returns the best point seen).
-    fn descend(&self, k: usize, start: [f32; 2], iterations: usize) -> [f32; 2] {
+    /// Inverse-compositional Gauss–Newton from `start` (whose residual may be known already):
+    /// each step, scaled by `step_scale`, solves with the patch's fixed Hessian; stops when a step
+    /// is tiny, or when the SSD stops falling (then returns the best point seen).
+    fn descend(
+        &self,
+        k: usize,
+        start: [f32; 2],
+        mut known: Option<Residual>,
+        iterations: usize,
+    ) -> [f32; 2] {
         let [a, b, c] = self.patches[k].inv_hessian;
         let mut d = start;
         let mut best = (f32::INFINITY, start);
         for _ in 0..iterations {
-            let (ssd, gx, gy) = self.residual(k, d);
+            let (ssd, gx, gy) = known.take().unwrap_or_else(|| self.residual(k, d));
             if ssd >= best.0 {
                 return best.1;
             }
@@ -445,7 +450,7 @@ impl<'a> PatchSearch<'a> {
 
     /// Mean-normalised SSD between patch `k` of frame 1 and frame 2 displaced by `d`, and the
     /// Gauss–Newton gradient Σ (g − ḡ)·r of the template gradients g against the residual r.
-    fn residual(&self, k: usize, d: [f32; 2]) -> (f32, f32, f32) {
+    fn residual(&self, k: usize, d: [f32; 2]) -> Residual {
         let patch = &self.patches[k];
         let (x0, y0) = (patch.x, patch.y);
         let window = self.to.window(x0, y0, d);
