@@ -9,13 +9,18 @@
 //! gradient constancy, each normalised by the squared local gradient (+ ζ²) so strong edges do
 //! not dominate. Frame 2 is warped once by w; the derivatives are taken on the mean of frame 1
 //! and the warped frame 2. Pixels that w carries outside frame 2 get no data term (frame 2 holds
-//! nothing to compare them with), so smoothness extends the flow of their neighbours. Each fixed-point (outer) iteration freezes the robust weights Ψ' at
-//! the current dw and solves the resulting linear system with a few SOR sweeps (Gauss–Seidel in
-//! raster order, relaxation ω, each pixel's 2 × 2 block solved for du then dv).
+//! nothing to compare them with), so smoothness extends the flow of their neighbours.
 //!
-//! Intensities are grey levels in [0, 255]; flow in pixels of the level. Arrays are flat and
-//! padded by one pixel on every side (stride w + 2): border pixels hold zero increments and
-//! zero smoothness weights, so the inner loops need no bounds logic.
+//! Each fixed-point (outer) iteration freezes the robust weights Ψ' at the current dw and solves
+//! the resulting linear system with a few SOR sweeps (red–black order, relaxation ω, each
+//! pixel's 2 × 2 block solved for du then dv). Where the flow is already smooth Ψ' of the
+//! smoothness term is large, so the refinement mostly acts around motion boundaries and noise.
+//!
+//! Intensities are grey levels in [0, 255]; flow in pixels of the level; derivatives are true
+//! derivatives (OpenCV's unnormalised [−1, 0, 1] kernels make them twice as large, which halves
+//! every increment). Arrays are flat and padded by one pixel on every side (stride w + 2):
+//! border pixels hold zero increments and zero smoothness weights, so the inner loops need no
+//! bounds logic.
 
 use super::pyramid::{Level, sample_clamped};
 use crate::error::{Error, Result};
