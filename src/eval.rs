@@ -87,6 +87,8 @@ pub struct FlowMetrics {
     pub epe: f64,
     /// Share of those pixels with end-point error > 3 px and > 5 % of the GT magnitude (KITTI Fl).
     pub outliers: f64,
+    /// Share of those pixels with end-point error > 3 px.
+    pub over_3px: f64,
     /// Share of known ground-truth pixels that have an estimate.
     pub coverage: f64,
     /// Pixels scored.
@@ -120,6 +122,7 @@ pub fn flow_metrics(gt: &FlowField, est: &FlowField) -> Result<FlowMetrics> {
             .filter(|(e, m)| *e > 3.0 && *e > 0.05 * m)
             .count() as f64
             / n,
+        over_3px: errors.iter().filter(|(e, _)| *e > 3.0).count() as f64 / n,
         coverage: errors.len() as f64 / gt_known as f64,
         pixels: errors.len(),
     })
@@ -251,6 +254,7 @@ mod tests {
         let m = flow_metrics(&gt, &est).unwrap();
         assert!((m.epe - 2.5).abs() < 1e-12);
         assert!((m.outliers - 0.5).abs() < 1e-12);
+        assert!((m.over_3px - 0.5).abs() < 1e-12);
         assert_eq!((m.coverage, m.pixels), (1.0, 2));
     }
 

@@ -6,7 +6,7 @@ use serde::Serialize;
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::flow::{FlowField, is_known, resize_flow};
+use crate::flow::{FlowField, FlowParams, compute_flow, is_known, resize_flow};
 use crate::formats::ply::PointCloud;
 use crate::grid::Grid;
 use crate::input::FramePair;
@@ -65,12 +65,16 @@ impl Default for Params {
     }
 }
 
-/// Where the flow 1→2 comes from.
+/// Where the flow 1→2 comes from. Every source yields the same two things for the later
+/// stages: a flow field at the working resolution and a mask of the vectors to trust.
 #[derive(Clone, Debug)]
 pub enum FlowInput {
     /// A given field (a `.flo` file or ground truth) at any resolution; it is resampled to the
     /// working resolution and its known vectors are trusted.
     Given(FlowField),
+    /// Computed from the two frames by [`compute_flow`] (DIS with variational refinement, both
+    /// ways); vectors failing the forward–backward check are not trusted.
+    Compute(FlowParams),
 }
 
 /// Milliseconds per stage and the solve's numbers, for `report.json` and the page.
@@ -81,6 +85,10 @@ pub struct Report {
     pub input_size: (usize, usize),
     pub params: Params,
     pub timings_ms: Vec<(Stage, f64)>,
+    /// Parameters of the computed flow; `None` when the flow was given.
+    pub flow: Option<FlowParams>,
+    /// Share of the working-resolution pixels whose flow is trusted.
+    pub reliable_flow: f64,
     pub superpixels: usize,
     pub degenerate: usize,
     pub hypotheses: usize,
@@ -93,6 +101,8 @@ pub struct Report {
 pub struct Reconstruction {
     /// Flow 1→2 used, at the working resolution.
     pub flow: FlowField,
+    /// True where that flow is trusted (known, and for computed flow forward–backward consistent).
+    pub reliable: Grid<bool>,
     pub superpixels: Superpixels,
     /// Touching superpixels and their boundary pixel pairs.
     pub boundaries: BoundaryGraph,
@@ -125,9 +135,19 @@ pub fn reconstruct(
     let mut clock = Clock::start();
 
     progress(Stage::Flow, 0.0);
-    let FlowInput::Given(given) = flow;
-    let flow = resize_flow(&given, w, h);
-    let reliable = flow.map(|&f| is_known(f));
+    let (flow, reliable, flow_params) = match flow {
+        FlowInput::Given(given) => {
+            let flow = resize_flow(&given, w, h);
+            let reliable = flow.map(|&f| is_known(f));
+            (flow, reliable, None)
+        }
+        FlowInput::Compute(flow_params) => {
+            let computed = compute_flow(&pair.frame1, &pair.frame2, &flow_params, &mut |f| {
+                progress(Stage::Flow, f)
+            })?;
+            (computed.forward, computed.reliable, Some(flow_params))
+        }
+    };
     if flow
         .data()
         .iter()
@@ -171,6 +191,9 @@ pub fn reconstruct(
         input_size: pair.input_size,
         params: *params,
         timings_ms: timings,
+        flow: flow_params,
+        reliable_flow: reliable.data().iter().filter(|&&r| r).count() as f64
+            / reliable.len().max(1) as f64,
         superpixels: sp.len(),
         degenerate: soup
             .pieces
@@ -183,6 +206,7 @@ pub fn reconstruct(
     };
     Ok(Reconstruction {
         flow,
+        reliable,
         superpixels: sp,
         boundaries,
         knn,

@@ -130,15 +130,116 @@ fn reconstruct_writes_the_documented_files() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(result.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["camera"]["source"], "user");
-    // Without a flow file the command says what is missing.
+    // Without a flow file the flow is computed; the report records its parameters.
+    let computed = dir.join("computed");
     let out = soup(&[
         "reconstruct",
         &path("frame1.png"),
         &path("frame2.png"),
+        "--intrinsics",
+        intrinsics.trim(),
+        "--superpixels",
+        "150",
+        "--preset",
+        "fast",
         "--out",
-        result.to_str().unwrap(),
+        computed.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(computed.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["flow"]["dis"]["finest_level"], 2);
+    assert!(report["reliable_flow"].as_f64().unwrap() > 0.5);
+    let flow =
+        superpixel_soup::formats::flo::decode(&std::fs::read(computed.join("flow.flo")).unwrap())
+            .unwrap();
+    assert_eq!(flow.size(), (256, 110));
+    let out = soup(&[
+        "reconstruct",
+        &path("frame1.png"),
+        &path("frame2.png"),
+        "--preset",
+        "slow",
+        "--out",
+        computed.to_str().unwrap(),
     ]);
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--flow"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("unknown flow preset"));
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn flow_writes_both_fields_and_a_picture_and_scores_cases() {
+    let dir = temp_dir("flow");
+    let out = soup(&[
+        "synth",
+        dir.to_str().unwrap(),
+        "--scene",
+        "street",
+        "--size",
+        "192x96",
+    ]);
+    assert!(out.status.success());
+    let case = dir.join("street");
+    let path = |name: &str| case.join(name).to_str().unwrap().to_string();
+    let (forward, backward, viz) = (dir.join("f.flo"), dir.join("b.flo"), dir.join("f.png"));
+    let out = soup(&[
+        "flow",
+        &path("frame1.png"),
+        &path("frame2.png"),
+        "--out",
+        forward.to_str().unwrap(),
+        "--backward",
+        backward.to_str().unwrap(),
+        "--viz",
+        viz.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read_flo =
+        |p: &PathBuf| superpixel_soup::formats::flo::decode(&std::fs::read(p).unwrap()).unwrap();
+    assert_eq!(read_flo(&forward).size(), (192, 96));
+    assert_eq!(read_flo(&backward).size(), (192, 96));
+    let picture = superpixel_soup::image::read_image_file(&viz).unwrap().frame;
+    assert_eq!(picture.size(), (192, 96));
+
+    // --eval prints one table row per case with its EPE.
+    let out = soup(&["flow", "--eval", case.to_str().unwrap(), "--preset", "fast"]);
+    assert!(out.status.success());
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let row = stdout
+        .lines()
+        .find(|l| l.starts_with("| street |"))
+        .unwrap_or_else(|| panic!("no row for street in {stdout}"));
+    let epe: f64 = row.split('|').nth(3).unwrap().trim().parse().unwrap();
+    assert!(epe < 2.0, "{row}");
+
+    // Errors: one line, non-zero exit.
+    let other = dir.join("other.png");
+    let small = superpixel_soup::grid::Grid::filled(50, 40, [9u8, 9, 9]);
+    std::fs::write(&other, superpixel_soup::image::encode_png(&small).unwrap()).unwrap();
+    let (frame1, frame2) = (path("frame1.png"), path("frame2.png"));
+    let forward = forward.to_str().unwrap();
+    for (args, expected) in [
+        (
+            vec!["flow", &frame1, other.to_str().unwrap(), "--out", forward],
+            "differ in size",
+        ),
+        (vec!["flow", &frame1], "two frames"),
+        (vec!["flow", &frame1, &frame2], "--out"),
+    ] {
+        let out = soup(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?} should fail");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(expected), "{args:?}: {stderr}");
+    }
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -1,6 +1,26 @@
-//! Dense optical flow: the flow field type shared by every stage.
+//! Dense optical flow between two frames, and the flow field type shared by every stage.
+//!
+//! [`compute_flow`] runs DIS ([`dis`]: coarse-to-fine patch search, densification and
+//! [`variational`] refinement on a grey [`pyramid`]) from frame 1 to frame 2 and back, and marks
+//! the vectors that survive the forward–backward check ([`consistency`]). [`colour`] draws a
+//! field with the Middlebury colour wheel.
+//!
+//! Conventions: flow f(u, v) = (u′ − u, v′ − v) maps a pixel of frame 1 to frame 2, pixel centres
+//! at integers, u right, v down, in pixels of the frames. Everything is single-threaded and
+//! deterministic: the same frames give bit-identical flow.
 
+pub mod colour;
+pub mod consistency;
+pub mod dis;
+mod lanes;
+pub mod pyramid;
+pub mod variational;
+
+pub use dis::{DisParams, Preset};
+
+use crate::error::{Error, Result};
 use crate::grid::Grid;
+use crate::image::{Frame, to_gray};
 
 /// Dense flow from frame 1 to frame 2 in pixels: element (u, v) is `[u' − u, v' − v]`.
 /// Unknown vectors are NaN (written to `.flo` as 1e10).
@@ -49,6 +69,116 @@ pub fn resize_flow(flow: &FlowField, width: usize, height: usize) -> FlowField {
         } else {
             [f32::NAN; 2]
         }
+    })
+}
+
+/// Everything [`compute_flow`] needs: the DIS parameters of a preset and the forward–backward
+/// tolerance.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct FlowParams {
+    pub dis: DisParams,
+    /// Absolute part of the forward–backward tolerance, in pixels.
+    pub fb_threshold: f32,
+    /// Part of the tolerance that grows with the motion: this share of ‖f(x)‖.
+    pub fb_relative: f32,
+}
+
+impl FlowParams {
+    /// The DIS parameters of `preset` with the default forward–backward tolerance,
+    /// 0.5 px + 2 % of the motion: on the synthetic scenes and middlebury-motorcycle it keeps
+    /// 70–90 % of the vectors and gives the soup lower motion and plane errors than looser
+    /// tolerances (1 px + 5 %).
+    pub fn preset(preset: Preset) -> Self {
+        FlowParams {
+            dis: DisParams::preset(preset),
+            fb_threshold: 0.5,
+            fb_relative: 0.02,
+        }
+    }
+
+    /// Fails with [`Error::InvalidParameter`] for values the algorithm cannot run with.
+    pub fn validate(&self) -> Result<()> {
+        self.dis.validate()?;
+        if !(self.fb_threshold >= 0.0 && self.fb_relative >= 0.0) {
+            return Err(Error::InvalidParameter(format!(
+                "forward–backward tolerance {} px + {}·|f| must be ≥ 0",
+                self.fb_threshold, self.fb_relative
+            )));
+        }
+        Ok(())
+    }
+}
+
+impl Default for FlowParams {
+    fn default() -> Self {
+        FlowParams::preset(Preset::Medium)
+    }
+}
+
+/// Flow both ways between two frames and where it can be trusted.
+#[derive(Clone, Debug)]
+pub struct FlowPair {
+    /// Flow frame 1 → frame 2.
+    pub forward: FlowField,
+    /// Flow frame 2 → frame 1 (defined on frame 2's pixels).
+    pub backward: FlowField,
+    /// True where the forward vector passes the forward–backward check (on frame 1's pixels).
+    pub reliable: Grid<bool>,
+}
+
+/// Dense flow frame 1 → 2 and 2 → 1 with the forward–backward mask. `progress` gets the share of
+/// the work done, in [0, 1].
+///
+/// Errors: [`Error::SizeMismatch`] when the frames differ in size, [`Error::TooSmall`] when a
+/// side is shorter than a patch (8 pixels), [`Error::InvalidParameter`] for invalid parameters. Identical
+/// frames give zero flow; textureless frames give a finite (zero) field.
+pub fn compute_flow(
+    frame1: &Frame,
+    frame2: &Frame,
+    params: &FlowParams,
+    progress: &mut dyn FnMut(f32),
+) -> Result<FlowPair> {
+    frame1.check_same_size(frame2)?;
+    params.validate()?;
+    let (w, h) = frame1.size();
+    let Some((finest, coarsest)) = dis::levels(w, h, &params.dis) else {
+        return Err(Error::TooSmall {
+            width: w,
+            height: h,
+            min: dis::PATCH,
+        });
+    };
+    progress(0.0);
+    let pyramid1 = pyramid::build(&to_gray(frame1), finest, coarsest);
+    let pyramid2 = pyramid::build(&to_gray(frame2), finest, coarsest);
+    let mut run = |from: &[pyramid::Level], to: &[pyramid::Level], offset: f32| {
+        let (u, v) = dis::dis_flow(from, to, &params.dis, &mut |f| progress(offset + 0.5 * f));
+        let (lw, lh) = pyramid::level_size(w, h, finest);
+        let factor = (1u32 << finest) as f32;
+        let (u, v) = if finest == 0 {
+            (u, v)
+        } else {
+            (
+                pyramid::upsample(&u, lw, lh, w, h, factor),
+                pyramid::upsample(&v, lw, lh, w, h, factor),
+            )
+        };
+        let data = u.into_iter().zip(v).map(|(u, v)| [u, v]).collect();
+        Grid::from_vec(w, h, data)
+    };
+    let forward = run(&pyramid1, &pyramid2, 0.0)?;
+    let backward = run(&pyramid2, &pyramid1, 0.5)?;
+    let reliable = consistency::forward_backward_mask(
+        &forward,
+        &backward,
+        params.fb_threshold,
+        params.fb_relative,
+    )?;
+    progress(1.0);
+    Ok(FlowPair {
+        forward,
+        backward,
+        reliable,
     })
 }
 

@@ -6,7 +6,10 @@
 
 use wasm_bindgen::prelude::*;
 
+mod flow;
 pub mod viewer;
+
+pub use flow::{FlowResult, compute_flow};
 
 /// Runs once when the module is instantiated: Rust panics then reach the browser console as
 /// readable messages instead of a bare `unreachable` trap.

@@ -6,6 +6,7 @@ use std::time::Instant;
 use serde::Serialize;
 use superpixel_soup::camera::resolve_intrinsics;
 use superpixel_soup::eval::{DepthMetrics, depth_metrics, median};
+use superpixel_soup::flow::{FlowParams, Preset};
 use superpixel_soup::formats::case::{Case, read_case};
 use superpixel_soup::formats::write_file;
 use superpixel_soup::grid::Grid;
@@ -24,6 +25,9 @@ pub struct Args {
     /// Use the case's ground-truth flow12.flo instead of computed flow (the oracle-flow ablation).
     #[arg(long)]
     gt_flow: bool,
+    /// Preset of the computed flow: fast, medium or high.
+    #[arg(long, default_value = "medium")]
+    preset: String,
     /// Also write all numbers as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
@@ -59,6 +63,7 @@ pub fn run(args: Args) -> Result<()> {
     let mut params = Params::default();
     params.superpixels.count = args.superpixels;
     params.k = args.k;
+    let flow_params = FlowParams::preset(Preset::from_name(&args.preset)?);
     println!(
         "| case | MRE | AbsRel | δ<1.25 | coverage | oracle-superpixel MRE | oracle-group MRE | hypotheses | seconds |"
     );
@@ -66,7 +71,8 @@ pub fn run(args: Args) -> Result<()> {
     let mut results = Vec::new();
     for dir in &args.cases {
         let case = read_case(dir)?;
-        let (result, rec) = evaluate(&case, &params, args.gt_flow)?;
+        let computed = (!args.gt_flow).then_some(flow_params);
+        let (result, rec) = evaluate(&case, &params, computed)?;
         println!(
             "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {} | {} | {:.2} |",
             result.case,
@@ -94,24 +100,27 @@ pub fn run(args: Args) -> Result<()> {
     Ok(())
 }
 
-fn evaluate(case: &Case, params: &Params, gt_flow: bool) -> Result<(CaseResult, Reconstruction)> {
+/// Reconstructs `case` with flow computed with `computed` parameters, or with its ground-truth
+/// flow when `None`, and scores the depth.
+fn evaluate(
+    case: &Case,
+    params: &Params,
+    computed: Option<FlowParams>,
+) -> Result<(CaseResult, Reconstruction)> {
     let gt = case.depth1.as_ref().ok_or_else(|| {
         Error::InvalidParameter(format!(
             "case {} has no depth1.pfm to score against",
             case.name
         ))
     })?;
-    let flow = if gt_flow {
-        case.flow12.clone().ok_or_else(|| {
+    let flow = match computed {
+        Some(flow_params) => FlowInput::Compute(flow_params),
+        None => FlowInput::Given(case.flow12.clone().ok_or_else(|| {
             Error::InvalidParameter(format!(
                 "case {} has no flow12.flo for --gt-flow",
                 case.name
             ))
-        })?
-    } else {
-        return Err(Error::InvalidParameter(
-            "computed flow is not part of the pipeline yet: pass --gt-flow".into(),
-        ));
+        })?),
     };
     let (w, h) = case.frame1.size();
     let camera = resolve_intrinsics(case.intrinsics, None, w, h);
@@ -126,7 +135,7 @@ fn evaluate(case: &Case, params: &Params, gt_flow: bool) -> Result<(CaseResult, 
         DEFAULT_MAX_SIDE,
     )?;
     let start = Instant::now();
-    let rec = reconstruct(&pair, FlowInput::Given(flow), params, &mut |_, _| {})?;
+    let rec = reconstruct(&pair, flow, params, &mut |_, _| {})?;
     let seconds = start.elapsed().as_secs_f64();
     let metrics = depth_metrics(gt, &rec.depth_input)?;
     let (oracle_superpixel_mre, oracle_group_mre) = oracles(&rec, case, gt, &camera.intrinsics);

@@ -8,6 +8,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod eval;
+mod flow;
 mod reconstruct;
 mod superpixels;
 mod synth;
@@ -24,6 +25,8 @@ struct Cli {
 enum Command {
     /// Render the synthetic scenes (frames, exact depth and flow) in the evaluation case layout.
     Synth(synth::Args),
+    /// Dense optical flow both ways between two frames (.flo, colour picture), or its EPE on cases.
+    Flow(flow::Args),
     /// Segment an image into SLIC superpixels (16-bit label PNG, overlay and mean-colour pictures).
     Superpixels(superpixels::Args),
     /// Reconstruct both frames: depth.pfm, frame1.ply, frame2.ply, flow.flo, labels.png, depth.png, report.json.
@@ -36,6 +39,7 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let result: superpixel_soup::Result<()> = match cli.command {
         Command::Synth(args) => synth::run(args),
+        Command::Flow(args) => flow::run(args),
         Command::Superpixels(args) => superpixels::run(args),
         Command::Reconstruct(args) => reconstruct::run(args),
         Command::Eval(args) => eval::run(args),

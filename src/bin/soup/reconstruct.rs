@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::colormap::depth_picture;
-use superpixel_soup::flow::resize_flow;
+use superpixel_soup::flow::{FlowParams, Preset, resize_flow};
 use superpixel_soup::formats::ply::{Encoding, encode};
 use superpixel_soup::formats::{flo, pfm, png16, read_file, write_file};
 use superpixel_soup::image::{encode_png, read_image_file};
@@ -24,9 +24,13 @@ pub struct Args {
     /// Intrinsics "fx fy cx cy" in pixels of the input images (default: EXIF, else a guess).
     #[arg(long)]
     intrinsics: Option<String>,
-    /// Flow 1→2 as a Middlebury .flo file (any resolution; it is resampled).
+    /// Flow 1→2 as a Middlebury .flo file (any resolution; it is resampled). Without it the flow
+    /// is computed (DIS with variational refinement, forward–backward checked).
     #[arg(long)]
     flow: Option<PathBuf>,
+    /// Preset of the computed flow: fast, medium or high.
+    #[arg(long, default_value = "medium")]
+    preset: String,
     /// Requested number of superpixels.
     #[arg(long, default_value_t = 1500)]
     superpixels: usize,
@@ -53,26 +57,19 @@ pub fn run(args: Args) -> Result<()> {
         .as_deref()
         .map(Intrinsics::parse)
         .transpose()?;
-    let pair = prepare_pair(image1, image2, user, args.max_side)?;
-    let Some(flow_path) = &args.flow else {
-        return Err(Error::InvalidParameter(
-            "computed optical flow is not part of the pipeline yet: pass --flow FLOW12.flo".into(),
-        ));
+    let flow = match &args.flow {
+        Some(path) => FlowInput::Given(flo::decode(&read_file(path)?)?),
+        None => FlowInput::Compute(FlowParams::preset(Preset::from_name(&args.preset)?)),
     };
-    let flow = flo::decode(&read_file(flow_path)?)?;
+    let pair = prepare_pair(image1, image2, user, args.max_side)?;
     let mut params = Params::default();
     params.superpixels.count = args.superpixels;
     params.k = args.k;
-    let rec = reconstruct(
-        &pair,
-        FlowInput::Given(flow),
-        &params,
-        &mut |stage, fraction| {
-            if fraction == 0.0 {
-                eprintln!("{}…", stage.name());
-            }
-        },
-    )?;
+    let rec = reconstruct(&pair, flow, &params, &mut |stage, fraction| {
+        if fraction == 0.0 {
+            eprintln!("{}…", stage.name());
+        }
+    })?;
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let out = |name: &str| args.out.join(name);
     let encoding = if args.ascii {
