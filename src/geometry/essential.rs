@@ -168,7 +168,7 @@ pub fn robust_motion(
                 MinimalSolver::FivePoint => 5,
                 MinimalSolver::EightPoint => pool.len().min(24),
             },
-            iterations: 30,
+            iterations: iterations.clamp(10, 30),
             threshold: to_normalised(px),
         };
         let (e, next) = ransac(
