@@ -152,6 +152,30 @@ fn synthetic_scenes_with_exact_flow() {
         assert!(m.mre < bound, "{}: MRE {}", kind.name(), m.mre);
         assert!(m.coverage > 0.95);
         assert_eq!(rec.cloud1.positions.len(), rec.cloud2.positions.len());
+        // Frame 2's points project where the flow says: X' = X + scene flow lands on x + f(x).
+        let k = rec.report.camera.intrinsics;
+        let mut errors: Vec<f64> = Vec::new();
+        for y in (0..rec.depth.height()).step_by(7) {
+            for x in (0..rec.depth.width()).step_by(7) {
+                let z = *rec.depth.get(x, y) as f64;
+                let d = rec.scene_flow.get(x, y);
+                if !z.is_finite() || !d[0].is_finite() {
+                    continue;
+                }
+                let p = Vector3::from(k.ray(x as f64, y as f64)) * z;
+                let q = p + Vector3::new(d[0] as f64, d[1] as f64, d[2] as f64);
+                let [u, v] = k.project([q.x, q.y, q.z]);
+                let f = rec.flow.get(x, y);
+                errors.push((u - x as f64 - f[0] as f64).hypot(v - y as f64 - f[1] as f64));
+            }
+        }
+        errors.sort_by(f64::total_cmp);
+        let median = errors[errors.len() / 2];
+        assert!(
+            median < 0.5,
+            "{}: median reprojection {median} px",
+            kind.name()
+        );
         assert!(rec.report.arap.energy_end <= rec.report.arap.energy_start);
     }
 }
