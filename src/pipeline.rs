@@ -12,7 +12,7 @@ use crate::grid::Grid;
 use crate::input::FramePair;
 use crate::output::{dense_depth, depth_at, point_clouds, scene_flow};
 use crate::soup::Soup;
-use crate::soup::arap::{ArapReport, ScaleParams, solve_scales};
+use crate::soup::arap::{ArapReport, ScaleInputs, ScaleParams, solve_scales};
 use crate::soup::init::{InitParams, unit_scale_soup};
 use crate::superpixels::graph::{BoundaryGraph, KnnGraph, boundary_graph, knn_graph};
 use crate::superpixels::{SlicParams, Superpixels, slic};
@@ -174,7 +174,14 @@ pub fn reconstruct(
 
     progress(Stage::Scales, 0.0);
     let mut soup = unit_soup.clone();
-    let arap = solve_scales(&mut soup, &sp, &knn, &boundaries, &flow, &k, &params.scales);
+    let inputs = ScaleInputs {
+        superpixels: &sp,
+        knn: &knn,
+        boundaries: &boundaries,
+        flow: &flow,
+        intrinsics: &k,
+    };
+    let arap = solve_scales(&mut soup, &inputs, &params.scales);
     timings.push((Stage::Scales, clock.lap()));
 
     progress(Stage::Outputs, 0.0);

@@ -9,7 +9,7 @@ use superpixel_soup::geometry::essential::Motion;
 use superpixel_soup::grid::Grid;
 use superpixel_soup::image::{ExifInfo, Frame, LoadedImage};
 use superpixel_soup::input::prepare_pair;
-use superpixel_soup::soup::arap::{ScaleParams, solve_scales};
+use superpixel_soup::soup::arap::{ScaleInputs, ScaleParams, solve_scales};
 use superpixel_soup::soup::{Piece, Soup};
 use superpixel_soup::superpixels::graph::{BoundaryGraph, knn_graph};
 use superpixel_soup::superpixels::{Segment, Superpixels};
@@ -80,15 +80,14 @@ fn arap_recovers_the_relative_scale_of_two_bodies() {
     // No touching boundaries: the K-NN (ARAP) terms alone decide.
     let boundaries = BoundaryGraph { edges: Vec::new() };
     let flow = Grid::filled(100, 100, [0.0f32, 0.0]);
-    let report = solve_scales(
-        &mut soup,
-        &sp,
-        &knn,
-        &boundaries,
-        &flow,
-        &K,
-        &ScaleParams::default(),
-    );
+    let inputs = ScaleInputs {
+        superpixels: &sp,
+        knn: &knn,
+        boundaries: &boundaries,
+        flow: &flow,
+        intrinsics: &K,
+    };
+    let report = solve_scales(&mut soup, &inputs, &ScaleParams::default());
     let (a, b) = (&soup.pieces[..], &soup.pieces[5..]);
     let lambda_a: Vec<f64> = (0..10)
         .flat_map(|j| (0..5).map(move |i| j * 10 + i))

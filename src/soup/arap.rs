@@ -168,20 +168,24 @@ impl Problem {
     }
 }
 
+/// What the scale solve reads besides the soup, all at the working resolution.
+#[derive(Clone, Copy, Debug)]
+pub struct ScaleInputs<'a> {
+    /// The superpixels (anchors, labels) the soup's pieces are.
+    pub superpixels: &'a Superpixels,
+    /// The K-NN graph of E_arap.
+    pub knn: &'a KnnGraph,
+    /// The touching pixel pairs of E_cont.
+    pub boundaries: &'a BoundaryGraph,
+    /// Flow 1→2, for the flow continuity across boundaries.
+    pub flow: &'a FlowField,
+    pub intrinsics: &'a Intrinsics,
+}
+
 /// Solves the relative scales of `soup` in place (Σλ = 1) and reports the energies.
-/// `boundaries` supplies the touching pixel pairs for E_cont and `flow` (1→2, the working
-/// resolution) the flow continuity across them.
-pub fn solve_scales(
-    soup: &mut Soup,
-    sp: &Superpixels,
-    knn: &KnnGraph,
-    boundaries: &BoundaryGraph,
-    flow: &FlowField,
-    k: &Intrinsics,
-    params: &ScaleParams,
-) -> ArapReport {
+pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams) -> ArapReport {
     let n = soup.pieces.len();
-    let problem = build_problem(soup, sp, knn, boundaries, flow, k, params);
+    let problem = build_problem(soup, inputs, params);
     let zero = vec![0.0; n];
     let (energy_start, arap_start) = (problem.energy(&zero, false), problem.energy(&zero, true));
 
@@ -215,30 +219,21 @@ pub fn solve_scales(
 
 /// E (the energy above) at the scales the soup's pieces carry now. For checking a solve
 /// against other scales (e.g. oracle scales).
-pub fn scale_energy(
-    soup: &Soup,
-    sp: &Superpixels,
-    knn: &KnnGraph,
-    boundaries: &BoundaryGraph,
-    flow: &FlowField,
-    k: &Intrinsics,
-    params: &ScaleParams,
-) -> f64 {
-    let problem = build_problem(soup, sp, knn, boundaries, flow, k, params);
+pub fn scale_energy(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> f64 {
+    let problem = build_problem(soup, inputs, params);
     let s: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
     problem.energy(&s, false)
 }
 
 /// Groups (pieces sharing a hypothesis) and every term between two pieces.
-fn build_problem(
-    soup: &Soup,
-    sp: &Superpixels,
-    knn: &KnnGraph,
-    boundaries: &BoundaryGraph,
-    flow: &FlowField,
-    k: &Intrinsics,
-    params: &ScaleParams,
-) -> Problem {
+fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Problem {
+    let ScaleInputs {
+        superpixels: sp,
+        knn,
+        boundaries,
+        flow,
+        intrinsics: k,
+    } = *inputs;
     let (group_of, group_sizes) = groups(soup);
     let anchor = |i: usize| {
         let a = sp.segments[i].anchor;
