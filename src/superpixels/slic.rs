@@ -49,7 +49,7 @@ struct Centre {
 /// or the compactness is not positive.
 pub fn slic(frame: &Frame, params: &SlicParams) -> Result<Superpixels> {
     let (w, h) = frame.size();
-    if params.count == 0 || params.count * 4 > w * h {
+    if params.count == 0 || params.count > w * h / 4 {
         return Err(Error::InvalidParameter(format!(
             "superpixel count must be between 1 and a quarter of the pixels ({}), got {}",
             w * h / 4,
@@ -81,12 +81,12 @@ pub fn slic(frame: &Frame, params: &SlicParams) -> Result<Superpixels> {
     segments_of(frame, &lab, labels)
 }
 
-/// Grid seeds `step` pixels apart, each moved to the lowest CIELAB gradient in its 3 × 3
-/// neighbourhood (off edges and noise). Returns the seeds and the grid step S.
+/// Seeds on a grid of about `count` cells of about S × S pixels (S = √(w·h / count)), each
+/// moved to the lowest CIELAB gradient in its 3 × 3 neighbourhood (off edges and noise).
+/// Returns the seeds and S.
 fn seed_centres(lab: &[Vec<f32>; 3], w: usize, h: usize, count: usize) -> (Vec<Centre>, f32) {
     let step = ((w * h) as f32 / count as f32).sqrt();
-    let nx = ((w as f32 / step).round() as usize).max(1);
-    let ny = ((h as f32 / step).round() as usize).max(1);
+    let (nx, ny) = seed_grid(w, h, count, step);
     let (sx, sy) = (w as f32 / nx as f32, h as f32 / ny as f32);
     let mut centres = Vec::with_capacity(nx * ny);
     for j in 0..ny {
@@ -103,6 +103,31 @@ fn seed_centres(lab: &[Vec<f32>; 3], w: usize, h: usize, count: usize) -> (Vec<C
         }
     }
     (centres, step)
+}
+
+/// Columns and rows of the seed grid. Candidates: w / S rounded down or up with the rows that
+/// bring the product closest to `count`, and the same the other way round (rounding w / S and
+/// h / S both can miss `count` by 10 % and more); the nearest product wins, then the squarer
+/// cells.
+fn seed_grid(w: usize, h: usize, count: usize, step: f32) -> (usize, usize) {
+    let fit = |along: f32, limit: usize, other_limit: usize| {
+        [along.floor(), along.ceil()].map(|n| {
+            let n = (n as usize).clamp(1, limit);
+            (
+                n,
+                ((count as f32 / n as f32).round() as usize).clamp(1, other_limit),
+            )
+        })
+    };
+    let by_columns = fit(w as f32 / step, w, h);
+    let by_rows = fit(h as f32 / step, h, w).map(|(ny, nx)| (nx, ny));
+    let miss = |&(nx, ny): &(usize, usize)| (nx * ny).abs_diff(count);
+    let skew = |&(nx, ny): &(usize, usize)| ((w * ny) as f32 / (h * nx) as f32).ln().abs();
+    by_columns
+        .into_iter()
+        .chain(by_rows)
+        .min_by(|a, b| miss(a).cmp(&miss(b)).then(skew(a).total_cmp(&skew(b))))
+        .unwrap_or((1, 1))
 }
 
 /// The pixel of the 3 × 3 neighbourhood of (x, y) with the smallest squared CIELAB gradient
@@ -611,6 +636,30 @@ mod tests {
     }
 
     #[test]
+    fn seed_grid_has_about_the_requested_cells() {
+        for (w, h) in [
+            (1024, 436),
+            (128, 64),
+            (64, 256),
+            (400, 20),
+            (741, 500),
+            (33, 97),
+        ] {
+            for count in [1, 7, 40, 60, 375, 1500, 2000]
+                .into_iter()
+                .filter(|&n| n <= w * h / 4)
+            {
+                let step = ((w * h) as f32 / count as f32).sqrt();
+                let (nx, ny) = seed_grid(w, h, count, step);
+                // A grid cannot always hit a small count (7 = 7 × 1 only): one cell off is fine.
+                let miss = (nx * ny).abs_diff(count);
+                assert!(miss <= (count / 10).max(1), "{w}×{h}, {count}: {nx}×{ny}");
+            }
+        }
+        assert_eq!(seed_grid(1024, 436, 1500, 17.25), (60, 25));
+    }
+
+    #[test]
     fn small_fragments_are_merged_into_neighbours() {
         // Labels: a 1-pixel island of label 1 inside label 0.
         let mut labels = vec![0u32; 25];
@@ -637,6 +686,16 @@ mod tests {
                 &frame,
                 &SlicParams {
                     count: 1000,
+                    ..SlicParams::default()
+                }
+            )
+            .is_err()
+        );
+        assert!(
+            slic(
+                &frame,
+                &SlicParams {
+                    count: usize::MAX,
                     ..SlicParams::default()
                 }
             )
