@@ -243,3 +243,63 @@ fn flow_writes_both_fields_and_a_picture_and_scores_cases() {
     }
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn superpixels_writes_labels_and_pictures() {
+    let dir = temp_dir("superpixels");
+    let synth = soup(&[
+        "synth",
+        dir.to_str().unwrap(),
+        "--scene",
+        "street",
+        "--size",
+        "128x64",
+    ]);
+    assert!(synth.status.success());
+    let frame = dir.join("street").join("frame1.png");
+    let file = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let out = soup(&[
+        "superpixels",
+        frame.to_str().unwrap(),
+        "--n",
+        "40",
+        "--compactness",
+        "12",
+        "--out",
+        &file("labels.png"),
+        "--overlay",
+        &file("overlay.png"),
+        "--mean",
+        &file("mean.png"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("superpixels (requested 40)"));
+    let (labels, _) =
+        superpixel_soup::formats::png16::decode(&std::fs::read(file("labels.png")).unwrap())
+            .unwrap();
+    assert_eq!(labels.size(), (128, 64));
+    let count = *labels.data().iter().max().unwrap() as usize + 1;
+    assert!((34..=46).contains(&count), "{count} superpixels");
+    for picture in ["overlay.png", "mean.png"] {
+        let image = superpixel_soup::image::read_image_file(&dir.join(picture)).unwrap();
+        assert_eq!(image.frame.size(), (128, 64), "{picture}");
+    }
+    // Bad requests fail with one readable line.
+    let out = soup(&[
+        "superpixels",
+        frame.to_str().unwrap(),
+        "--n",
+        "5000",
+        "--out",
+        &file("labels.png"),
+    ]);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success());
+    assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains("superpixel count"), "{stderr}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

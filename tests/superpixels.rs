@@ -5,15 +5,55 @@
 use superpixel_soup::eval::{boundary_recall, eval_case_dir};
 use superpixel_soup::formats::case::read_case;
 use superpixel_soup::grid::Grid;
-use superpixel_soup::image::Frame;
+use superpixel_soup::image::{Frame, to_lab};
 use superpixel_soup::superpixels::graph::{boundary_graph, knn_graph};
 use superpixel_soup::superpixels::{SlicParams, Superpixels, slic};
 use superpixel_soup::synth::{SceneKind, render};
 
 /// Every label is exactly one 4-connected region, labels have no gaps, the count is within ±15 %
-/// of the request and no superpixel is tiny.
-fn check_segmentation(sp: &Superpixels, requested: usize) {
+/// of the request, no superpixel is tiny, and each segment's pixel list, bounding box, anchor and
+/// mean colours describe its pixels of `frame`.
+fn check_segmentation(sp: &Superpixels, frame: &Frame, requested: usize) {
     let (w, h) = sp.labels.size();
+    let lab = to_lab(frame);
+    for (label, seg) in sp.segments.iter().enumerate() {
+        assert!(seg.pixels.windows(2).all(|p| p[0] < p[1]), "scan order");
+        assert!(
+            seg.pixels
+                .iter()
+                .all(|&p| sp.labels.data()[p as usize] == label as u32)
+        );
+        let xy = |p: u32| ((p as usize % w) as f64, (p as usize / w) as f64);
+        let n = seg.pixels.len() as f64;
+        let (mx, my) = seg.pixels.iter().fold((0.0, 0.0), |(sx, sy), &p| {
+            let (x, y) = xy(p);
+            (sx + x / n, sy + y / n)
+        });
+        assert!((seg.anchor[0] - mx).abs() < 1e-6 && (seg.anchor[1] - my).abs() < 1e-6);
+        let (xs, ys): (Vec<f64>, Vec<f64>) = seg.pixels.iter().map(|&p| xy(p)).unzip();
+        let min_max = |v: &[f64]| {
+            v.iter()
+                .fold((f64::MAX, 0f64), |(a, b), &c| (a.min(c), b.max(c)))
+        };
+        let ((x0, x1), (y0, y1)) = (min_max(&xs), min_max(&ys));
+        assert_eq!(seg.bbox, [x0, y0, x1, y1].map(|v| v as u32));
+        for k in 0..3 {
+            let rgb = seg
+                .pixels
+                .iter()
+                .map(|&p| frame.data()[p as usize][k] as f64)
+                .sum::<f64>()
+                / n;
+            assert_eq!(seg.mean_rgb[k], rgb.round() as u8);
+            let l = seg
+                .pixels
+                .iter()
+                .map(|&p| lab.data()[p as usize][k] as f64)
+                .sum::<f64>()
+                / n;
+            assert!((seg.mean_lab[k] as f64 - l).abs() < 1e-3);
+        }
+    }
     let n = sp.len();
     assert!(
         (n as f64 - requested as f64).abs() <= 0.15 * requested as f64,
@@ -72,7 +112,7 @@ fn synthetic_scenes_segment_cleanly_with_high_boundary_recall() {
             ..SlicParams::default()
         };
         let sp = slic(&scene.frame1, &params).unwrap();
-        check_segmentation(&sp, 375);
+        check_segmentation(&sp, &scene.frame1, 375);
         let recall = boundary_recall(&sp.labels, &scene.depth1, 0.05, 2)
             .unwrap()
             .unwrap();
@@ -142,7 +182,7 @@ fn real_photo_segments_cleanly() {
     };
     let case = read_case(&dir).unwrap();
     let sp = slic(&case.frame1, &SlicParams::default()).unwrap();
-    check_segmentation(&sp, 1500);
+    check_segmentation(&sp, &case.frame1, 1500);
     let recall = boundary_recall(&sp.labels, case.depth1.as_ref().unwrap(), 0.05, 2)
         .unwrap()
         .unwrap();
@@ -163,5 +203,5 @@ fn flat_image_still_gives_connected_superpixels() {
         },
     )
     .unwrap();
-    check_segmentation(&sp, 50);
+    check_segmentation(&sp, &frame, 50);
 }

@@ -100,7 +100,7 @@ pub fn compute_flow(
 }
 
 /// An RGB frame from RGBA bytes (alpha ignored); fails unless there are `4 · w · h` of them.
-fn frame_from_rgba(rgba: &[u8], w: usize, h: usize) -> Result<Frame> {
+pub(super) fn frame_from_rgba(rgba: &[u8], w: usize, h: usize) -> Result<Frame> {
     if rgba.len() != 4 * w * h {
         return Err(Error::InvalidParameter(format!(
             "an RGBA frame of {w}×{h} pixels has {} bytes, got {}",

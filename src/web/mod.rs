@@ -11,6 +11,9 @@ pub mod viewer;
 
 pub use flow::{FlowResult, compute_flow};
 
+/// `computeSuperpixels`: SLIC superpixels and their pictures for the page.
+pub mod superpixels;
+
 /// Runs once when the module is instantiated: Rust panics then reach the browser console as
 /// readable messages instead of a bare `unreachable` trap.
 #[wasm_bindgen(start)]
