@@ -7,7 +7,7 @@
 //! u = 79.5 + f·x/z, v = 59.5 + f·y/z with f = 60 / tan 30°. Pictures are read back with
 //! `screenshot()` (PNG) and checked for properties with a tolerance, never compared exactly
 //! across backends.
-#![cfg(target_arch = "wasm32")]
+#![cfg(all(target_arch = "wasm32", feature = "viewer"))]
 
 use js_sys::{Reflect, Uint8Array};
 use superpixel_soup::image::{Frame, decode_image};

@@ -7,6 +7,7 @@
 use wasm_bindgen::prelude::*;
 
 mod flow;
+#[cfg(feature = "viewer")]
 pub mod viewer;
 
 pub use flow::{FlowResult, compute_flow};
