@@ -7,8 +7,10 @@ use crate::grid::Grid;
 /// An 8-bit sRGB colour frame; element (u, v) is `[red, green, blue]`.
 pub type Frame = Grid<[u8; 3]>;
 
-/// What the EXIF block of a photo told us.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What the EXIF block of a photo told us. In JSON (the web page's worker messages) the fields
+/// are `focal35mm` and `warning`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase", default)]
 pub struct ExifInfo {
     /// 35 mm-equivalent focal length in millimetres (`FocalLengthIn35mmFilm`), when present and positive.
     pub focal_35mm: Option<f64>,

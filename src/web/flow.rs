@@ -58,11 +58,7 @@ impl FlowResult {
     /// (`4 · width · height`, opaque) ready for `new ImageData(...)`.
     #[wasm_bindgen(js_name = forwardPicture)]
     pub fn forward_picture(&self) -> Vec<u8> {
-        flow_picture(&self.pair.forward, None)
-            .data()
-            .iter()
-            .flat_map(|&[r, g, b]| [r, g, b, 255])
-            .collect()
+        super::rgba(&flow_picture(&self.pair.forward, None))
     }
 }
 
