@@ -103,6 +103,20 @@ function clearAlert() {
   $('alert').replaceChildren();
 }
 
+/**
+ * Starts a user action (reading input, a run): clears the alert and sets the state to
+ * "running" until the action ends. Returns a check that turns false once a later action or a
+ * cancel has taken over, so an action stops after its next await.
+ */
+function begin(status) {
+  const token = {};
+  page.action = token;
+  clearAlert();
+  setStatus(status);
+  setState('running');
+  return () => page.action === token;
+}
+
 /** Shows an error and leaves the page ready for the next input. */
 function fail(message, action = null) {
   showAlert(message, action);
@@ -133,7 +147,7 @@ async function takeFiles(fileList) {
   if (document.body.dataset.state === 'running') {
     cancel();
   }
-  clearAlert();
+  const current = begin('Reading the files…');
   const others = files.filter((f) => kindOf(f) === 'other');
   if (others.length > 0) {
     const f = others[0];
@@ -148,7 +162,13 @@ async function takeFiles(fileList) {
       fail('Drop one video on its own, or two photos.');
       return;
     }
-    await loadVideo(videos[0]);
+    try {
+      await loadVideo(videos[0]);
+    } catch (e) {
+      if (current()) {
+        fail(`${videos[0].name}: could not take frames from the video (${e.message}).`);
+      }
+    }
     return;
   }
   if (images.length === 1) {
@@ -162,15 +182,21 @@ async function takeFiles(fileList) {
   }
   let frames;
   try {
-    setStatus('Reading the photos…');
     frames = await Promise.all(images.map(decodeImage));
   } catch (e) {
-    fail(e.message);
+    if (current()) {
+      fail(e.message);
+    }
+    return;
+  }
+  if (!current()) {
     return;
   }
   hideVideo();
   await setFrames(frames);
-  await run();
+  if (current()) {
+    await run();
+  }
 }
 
 /** Decodes an image file with the browser and reads its EXIF block with the library. */
@@ -235,8 +261,7 @@ async function loadSample() {
   if (document.body.dataset.state === 'running') {
     cancel();
   }
-  clearAlert();
-  setStatus('Loading the sample…');
+  const current = begin('Loading the sample…');
   try {
     const fetchFile = async (name) => {
       const response = await fetch(new URL(`sample/${name}`, import.meta.url));
@@ -250,13 +275,20 @@ async function loadSample() {
     );
     const [fx, fy, cx, cy] = (await intrinsics.text()).trim().split(/\s+/).map(Number);
     const frames = await Promise.all([one, two].map(decodeImage));
+    if (!current()) {
+      return;
+    }
     hideVideo();
     await setFrames(frames, { intrinsics: { fx, fy, cx, cy }, source: 'the sample’s exact intrinsics' });
   } catch (e) {
-    fail(`Could not load the sample: ${e.message}`);
+    if (current()) {
+      fail(e.name === 'OutOfMemoryError' ? e.message : `Could not load the sample: ${e.message}`);
+    }
     return;
   }
-  await run();
+  if (current()) {
+    await run();
+  }
 }
 
 /** A dropped video: shows the scrubber and takes two frames (0 s and 0.5 s to start with). */
@@ -268,14 +300,19 @@ async function loadVideo(file) {
   page.video = { name: file.name, url: URL.createObjectURL(file) };
   video.src = page.video.url;
   setStatus(`Opening ${file.name}…`);
+  const token = page.action;
   try {
     await waitFor(video, 'loadeddata');
-    if (!Number.isFinite(video.duration)) {
-      // Recorded WebM files often have no duration until the end has been seen.
-      video.currentTime = 1e9;
-      await waitFor(video, 'seeked');
+    // Recorded WebM files often have no duration until their end has been read: seek far
+    // beyond it, wait for the duration to become known, and come back.
+    while (!Number.isFinite(video.duration)) {
+      video.currentTime = Number.MAX_SAFE_INTEGER;
+      await waitFor(video, 'durationchange');
     }
   } catch {
+    if (page.action !== token) {
+      return;
+    }
     fail(`${file.name} could not be played: the file is damaged or in a format this browser cannot read.`);
     hideVideo();
     return;
@@ -287,6 +324,9 @@ async function loadVideo(file) {
   $('video-panel').hidden = false;
   const frames = [await videoFrame(0), await videoFrame(Math.min(0.5, duration))];
   await showVideoTime(0);
+  if (page.action !== token) {
+    return;
+  }
   await setFrames(frames);
   setStatus('Pick two frames of the video with the scrubber (“Use as frame 1 / 2”), then press Reconstruct.');
   setState('idle');
@@ -296,19 +336,26 @@ function hideVideo() {
   $('video-panel').hidden = true;
 }
 
-/** Seeks the video to `seconds` and waits until that frame is shown. */
+/** Seeks the video to `seconds` and waits until that frame can be drawn. */
 async function showVideoTime(seconds) {
   const video = $('video');
   video.currentTime = seconds;
-  await waitFor(video, 'seeked');
+  await videoSettled(video);
   $('video-time').textContent = `${video.currentTime.toFixed(2)} s`;
   $('video-scrubber').value = String(video.currentTime);
+}
+
+/** Resolves once the video is not seeking and has its current frame (events may come late). */
+async function videoSettled(video) {
+  while (video.seeking || video.readyState < HTMLMediaElement.HAVE_CURRENT_DATA) {
+    await waitFor(video, ['seeked', 'canplay']);
+  }
 }
 
 async function videoFrame(seconds) {
   await showVideoTime(seconds);
   const video = $('video');
-  const bitmap = await createImageBitmap(video);
+  const bitmap = await captureVideo(video);
   return {
     name: `${page.video.name} at ${video.currentTime.toFixed(2)} s`,
     bitmap,
@@ -318,24 +365,50 @@ async function videoFrame(seconds) {
   };
 }
 
-async function takeVideoFrame(index) {
-  const frame = await videoFrame(Number($('video-scrubber').value));
-  const frames = [...page.frames];
-  frames[index] = frame;
-  await setFrames(frames);
+/**
+ * The video's current frame as an ImageBitmap. Right after a seek the frame may not be ready to
+ * draw yet even when the element says so (Chromium, recorded WebM): try again for a while.
+ */
+async function captureVideo(video) {
+  for (let attempt = 0; ; attempt++) {
+    try {
+      return await createImageBitmap(video);
+    } catch (e) {
+      if (attempt === 40) {
+        throw e;
+      }
+      await new Promise((resolve) => setTimeout(resolve, 50));
+    }
+  }
 }
 
-/** Resolves on `event` from `target`, rejects on its `error` event. */
-function waitFor(target, event) {
+async function takeVideoFrame(index) {
+  try {
+    const frame = await videoFrame(Number($('video-scrubber').value));
+    const frames = [...page.frames];
+    frames[index] = frame;
+    await setFrames(frames);
+  } catch (e) {
+    fail(`Could not take that frame of ${page.video.name}: ${e.message}`);
+  }
+}
+
+/** Resolves on the first of `events` (a name or a list) from `target`; rejects on its `error`. */
+function waitFor(target, events) {
+  const names = [events].flat();
   return new Promise((resolve, reject) => {
-    const done = (handler) => (e) => {
-      target.removeEventListener(event, ok);
+    const finish = (settle) => (event) => {
+      for (const name of names) {
+        target.removeEventListener(name, ok);
+      }
       target.removeEventListener('error', bad);
-      handler(e);
+      settle(event);
     };
-    const ok = done(resolve);
-    const bad = done(() => reject(new Error(`${event} failed`)));
-    target.addEventListener(event, ok);
+    const ok = finish(resolve);
+    const bad = finish(() => reject(new Error(`${names.join(' or ')} failed`)));
+    for (const name of names) {
+      target.addEventListener(name, ok);
+    }
     target.addEventListener('error', bad);
   });
 }
@@ -464,21 +537,18 @@ async function run({ resizeSecond = false } = {}) {
     fail(e.message);
     return;
   }
-  clearAlert();
+  const current = begin('Starting…');
   resetProgress();
   $('results').hidden = true;
-  setState('running');
-  setStatus('Starting…');
   const started = performance.now();
-  const token = (page.runToken = {});
   try {
     const bitmaps = await Promise.all(page.frames.map((f) => createImageBitmap(f.bitmap)));
     const { result } = await pipeline.request('run', { frames: bitmaps, options }, bitmaps);
     const received = performance.now();
-    await showResult(result);
-    if (page.runToken !== token) {
+    if (!current()) {
       return;
     }
+    await showResult(result);
     const finished = performance.now();
     page.lastRun = {
       totalMs: finished - started,
@@ -497,7 +567,7 @@ async function run({ resizeSecond = false } = {}) {
       `${result.cloud.count.toLocaleString('en')} points.`);
     setState('done');
   } catch (e) {
-    if (e instanceof CancelledError || page.runToken !== token) {
+    if (e instanceof CancelledError || !current()) {
       return;
     }
     failRun(e);
@@ -524,7 +594,7 @@ function failRun(error) {
 }
 
 function cancel() {
-  page.runToken = null;
+  page.action = null;
   pipeline.restart();
   resetProgress();
   setStatus('Cancelled.');

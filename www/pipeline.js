@@ -70,10 +70,11 @@ export class Pipeline {
       const error = new Error(data.message);
       error.name = data.name;
       error.fatal = data.fatal;
-      if (data.fatal) {
-        this.restart();
-      }
       request.reject(error);
+      if (data.fatal) {
+        // The wasm instance is unusable: whatever else was asked of it fails the same way.
+        this.restart(error);
+      }
     }
   }
 
@@ -87,11 +88,14 @@ export class Pipeline {
     });
   }
 
-  /** Terminates the worker (ending whatever it computes) and starts a fresh one. */
-  restart() {
+  /**
+   * Terminates the worker (ending whatever it computes) and starts a fresh one. Pending requests
+   * fail with `reason` (by default a CancelledError).
+   */
+  restart(reason = new CancelledError()) {
     this.worker.terminate();
     for (const { reject } of this.pending.values()) {
-      reject(new CancelledError());
+      reject(reason);
     }
     this.pending.clear();
     this.start();

@@ -117,7 +117,7 @@ function needResult() {
 
 /** The error message for the page: out-of-memory aborts are told apart from other crashes. */
 function describe(error) {
-  const mb = (bytes) => `${Math.round(bytes / 2 ** 20)} MB`;
+  const mb = (bytes) => (bytes < 2 ** 20 ? `${Math.ceil(bytes / 2 ** 10)} kB` : `${Math.round(bytes / 2 ** 20)} MB`);
   if (error instanceof WebAssembly.RuntimeError) {
     const failed = soup.failedAllocation();
     if (failed !== undefined) {
