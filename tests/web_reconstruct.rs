@@ -4,26 +4,32 @@
 //! JavaScript `Error`s.
 #![cfg(target_arch = "wasm32")]
 
-use js_sys::{Function, Uint8Array};
+use js_sys::Function;
 use superpixel_soup::formats::ply;
 use superpixel_soup::image::{Frame, encode_png};
 use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::web::memory::failed_allocation;
 use superpixel_soup::web::reconstruct::{
-    PageReconstruction, page_defaults, read_exif, reconstruct, resolve_intrinsics_json,
+    FrameBuilder, PageReconstruction, page_defaults, read_exif, reconstruct,
+    resolve_intrinsics_json,
 };
 use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
 
 wasm_bindgen_test_configure!(run_in_browser);
 
-fn rgba(frame: &Frame) -> Uint8Array {
-    let bytes: Vec<u8> = frame
+/// A FrameBuilder filled with `frame`, in strips of up to 7 rows (as the worker fills it).
+fn builder(frame: &Frame) -> FrameBuilder {
+    let mut builder = FrameBuilder::new(frame.width() as u32, frame.height() as u32);
+    let rows: Vec<u8> = frame
         .data()
         .iter()
         .flat_map(|&[r, g, b]| [r, g, b, 255])
         .collect();
-    Uint8Array::from(&bytes[..])
+    for strip in rows.chunks(7 * 4 * frame.width()) {
+        builder.push_rows(strip).unwrap();
+    }
+    builder
 }
 
 /// The options the page sends: the defaults with a few superpixels (a small, quick run).
@@ -39,16 +45,7 @@ fn options(changes: &str) -> String {
 }
 
 fn run(one: &Frame, two: &Frame, options: &str) -> Result<PageReconstruction, JsValue> {
-    reconstruct(
-        &rgba(one),
-        one.width() as u32,
-        one.height() as u32,
-        &rgba(two),
-        two.width() as u32,
-        two.height() as u32,
-        options,
-        None,
-    )
+    reconstruct(builder(one), builder(two), options, None)
 }
 
 /// The `name` and `message` of a thrown error.
@@ -72,12 +69,8 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
         },
     );
     let result = reconstruct(
-        &rgba(&scene.frame1),
-        192,
-        82,
-        &rgba(&scene.frame2),
-        192,
-        82,
+        builder(&scene.frame1),
+        builder(&scene.frame2),
         &options(r#"{"maxSide": 128}"#),
         Some(progress.as_ref().unchecked_ref::<Function>().clone()),
     )
@@ -174,20 +167,23 @@ fn bad_input_throws_named_errors_with_the_library_messages() {
         "{message}"
     );
 
-    // RGBA of the wrong length for the size given.
-    let error = reconstruct(
-        &rgba(&scene.frame1),
-        64,
-        47,
-        &rgba(&scene.frame2),
-        64,
-        48,
-        &options("{}"),
-        None,
-    )
-    .err()
-    .unwrap();
-    assert_eq!(name_and_message(error).0, "InvalidParameterError");
+    // Frames filled wrongly: ragged rows, too many rows, missing rows.
+    let mut ragged = FrameBuilder::new(64, 48);
+    let (name, message) = name_and_message(ragged.push_rows(&[0; 4 * 64 + 4]).unwrap_err());
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("has 256 bytes, got 260"), "{message}");
+    let mut full = builder(&scene.frame1);
+    let (_, message) = name_and_message(full.push_rows(&[0; 4 * 64]).unwrap_err());
+    assert!(message.contains("got 49 rows"), "{message}");
+    let mut partial = FrameBuilder::new(64, 48);
+    partial.push_rows(&[0; 4 * 64 * 47]).unwrap();
+    let (name, message) = name_and_message(
+        reconstruct(partial, builder(&scene.frame2), &options("{}"), None)
+            .err()
+            .unwrap(),
+    );
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("got only 47 rows"), "{message}");
 }
 
 #[wasm_bindgen_test]

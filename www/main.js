@@ -6,7 +6,8 @@
 //
 // document.body.dataset.state: "loading" (worker not ready yet) → "idle" → "running" →
 // "done" or "error"; a cancel goes back to "idle". Errors are shown in #alert (role="alert").
-// URL option: ?backend=auto|webgpu|webgl2 picks the viewer's graphics backend.
+// URL options: ?backend=auto|webgpu|webgl2 picks the viewer's graphics backend; ?worker=full
+// runs the pipeline with the full wasm build instead of the lean one (for measurements).
 // window.soupPage exposes the viewer, the worker and the last run's timings (tests, benchmark).
 
 import { CancelledError, Pipeline } from './pipeline.js';
@@ -14,7 +15,9 @@ import { wireViewerControls } from './viewer-controls.js';
 
 const $ = (id) => document.getElementById(id);
 
-const BACKEND = new URLSearchParams(location.search).get('backend') ?? 'auto';
+const URL_OPTIONS = new URLSearchParams(location.search);
+const BACKEND = URL_OPTIONS.get('backend') ?? 'auto';
+const WORKER_MODULE = URL_OPTIONS.get('worker') === 'full' ? 'full' : 'lean';
 const BACKEND_NAMES = { webgpu: 'WebGPU', webgl2: 'WebGL2' };
 /** Share of the progress bar per stage (roughly their share of the time on a 1024 × 436 pair). */
 const STAGE_WEIGHTS = { flow: 0.25, superpixels: 0.2, motion: 0.35, scales: 0.15, outputs: 0.05 };
@@ -27,21 +30,34 @@ const STAGE_LABELS = {
 };
 /** Options of createImageBitmap: pixels as stored (upright by EXIF), no colour management. */
 const DECODE = { imageOrientation: 'from-image', colorSpaceConversion: 'none', premultiplyAlpha: 'none' };
+/** Long side of the thumbnails kept of each frame, in pixels. */
+const THUMBNAIL = 320;
 const IMAGE_NAME = /\.(png|jpe?g|webp|gif|bmp|avif|tiff?)$/i;
 const VIDEO_NAME = /\.(mp4|m4v|webm|mov|mkv|ogv)$/i;
 
 const page = {
   /** Defaults and names from the library (`pageDefaults`), once the worker is ready. */
   defaults: null,
-  /** The two frames: { name, bitmap, width, height, exif: { focal35mm, warning } }. */
+  /**
+   * The two frames: { name, width, height, exif: { focal35mm, warning }, thumbnail (a small
+   * ImageBitmap), and the pixels: `source` (the file, decoded again for each run) and/or
+   * `bitmap` (decoded pixels: a video frame's, or a photo's until its first run takes them) }.
+   * Large photos are not kept decoded: 12 megapixels are 48 MB each.
+   */
   frames: [],
   /** "auto": intrinsics from EXIF or the default (resolved by the library); "user": the form's. */
   intrinsicsMode: 'auto',
-  /** The organised cloud of the last result (kept to switch the soup view back). */
-  cloud: null,
+  /** Point count of the last result's (organised) cloud; the worker keeps the cloud itself. */
+  points: 0,
   viewer: null,
   /** Timings of the last finished run (milliseconds), for the benchmark. */
   lastRun: null,
+  /** When the current user action began (performance.now()), for lastRun.endToEndMs. */
+  actionStartedAt: null,
+  /** Milliseconds from navigation to the page being ready (worker loaded), and to the viewer. */
+  readyMs: null,
+  viewerReadyMs: null,
+  /** Milliseconds from `new Worker` to its module loaded, per (re)start. */
   workerStartMs: [],
   video: null,
 };
@@ -51,6 +67,7 @@ const pipeline = new Pipeline({
   onReady: ({ version, defaults, startMs }) => {
     page.workerStartMs.push(startMs);
     if (page.defaults === null) {
+      page.readyMs = performance.now(); // since navigation start
       page.defaults = defaults;
       $('version').textContent = version;
       fillForm(defaults.options);
@@ -66,7 +83,7 @@ const pipeline = new Pipeline({
     showAlert(`The page cannot run here: ${message}. Build the module with ./serve.sh.`);
   },
   onProgress: (stage, fraction) => showProgress(stage, fraction),
-});
+}, WORKER_MODULE);
 page.pipeline = pipeline;
 
 // ---------------------------------------------------------------------------------------------
@@ -109,6 +126,7 @@ function clearAlert() {
  * cancel has taken over, so an action stops after its next await.
  */
 function begin(status) {
+  page.actionStartedAt ??= performance.now();
   const token = {};
   page.action = token;
   clearAlert();
@@ -119,6 +137,7 @@ function begin(status) {
 
 /** Shows an error and leaves the page ready for the next input. */
 function fail(message, action = null) {
+  page.actionStartedAt = null;
   showAlert(message, action);
   setStatus('');
   setState('error');
@@ -210,14 +229,46 @@ async function decodeImage(file) {
   }
   const bytes = await file.arrayBuffer();
   const { exif } = await pipeline.request('exif', { bytes }, [bytes]);
-  return { name: file.name, bitmap, width: bitmap.width, height: bitmap.height, exif };
+  return makeFrame(file.name, bitmap, file, exif);
+}
+
+/** A frame of `bitmap` (the decoded pixels of `source`, or a video frame when `source` is null). */
+async function makeFrame(name, bitmap, source, exif) {
+  const scale = Math.min(1, THUMBNAIL / Math.max(bitmap.width, bitmap.height));
+  const thumbnail = await createImageBitmap(bitmap, {
+    resizeWidth: Math.max(1, Math.round(bitmap.width * scale)),
+    resizeHeight: Math.max(1, Math.round(bitmap.height * scale)),
+    resizeQuality: 'medium',
+  });
+  return { name, width: bitmap.width, height: bitmap.height, exif, thumbnail, source, bitmap };
+}
+
+/**
+ * The frame's full pixels for one run (the worker takes and closes them): a photo's decoded
+ * pixels the first time, then decoded again from its file; a copy of a video frame.
+ */
+async function pixelsForRun(frame) {
+  if (frame.source === null) {
+    return createImageBitmap(frame.bitmap);
+  }
+  if (frame.bitmap !== null) {
+    const bitmap = frame.bitmap;
+    frame.bitmap = null;
+    return bitmap;
+  }
+  return createImageBitmap(frame.source, DECODE);
+}
+
+function closeFrame(frame) {
+  frame.thumbnail.close();
+  frame.bitmap?.close();
 }
 
 /** Makes `frames` the input pair: thumbnails, sizes, intrinsics. */
 async function setFrames(frames, { intrinsics = null, source = '' } = {}) {
   for (const frame of page.frames) {
     if (!frames.includes(frame)) {
-      frame.bitmap.close();
+      closeFrame(frame);
     }
   }
   page.frames = frames;
@@ -238,7 +289,7 @@ function drawThumbnails() {
     const [w, h] = [frame.width * scale, frame.height * scale];
     const context = canvas.getContext('2d');
     context.clearRect(0, 0, canvas.width, canvas.height);
-    context.drawImage(frame.bitmap, (canvas.width - w) / 2, (canvas.height - h) / 2, w, h);
+    context.drawImage(frame.thumbnail, (canvas.width - w) / 2, (canvas.height - h) / 2, w, h);
     const focal = frame.exif.focal35mm ? `, ${frame.exif.focal35mm} mm (35 mm equiv.)` : '';
     $(`thumb${i + 1}-info`).textContent = `${frame.name} · ${frame.width} × ${frame.height}${focal}`;
   });
@@ -248,13 +299,18 @@ async function swapFrames() {
   if (page.frames.length !== 2) {
     return;
   }
-  const wasUser = page.intrinsicsMode === 'user';
+  if (document.body.dataset.state === 'running') {
+    cancel();
+  }
+  const current = begin('Swapping the frames…');
   page.frames = [page.frames[1], page.frames[0]];
   drawThumbnails();
-  if (!wasUser) {
-    await refreshIntrinsics();
+  if (page.intrinsicsMode === 'auto') {
+    await refreshIntrinsics(); // frame 1's EXIF decides
   }
-  await run();
+  if (current()) {
+    await run();
+  }
 }
 
 async function loadSample() {
@@ -329,6 +385,7 @@ async function loadVideo(file) {
   }
   await setFrames(frames);
   setStatus('Pick two frames of the video with the scrubber (“Use as frame 1 / 2”), then press Reconstruct.');
+  page.actionStartedAt = null;
   setState('idle');
 }
 
@@ -356,13 +413,8 @@ async function videoFrame(seconds) {
   await showVideoTime(seconds);
   const video = $('video');
   const bitmap = await captureVideo(video);
-  return {
-    name: `${page.video.name} at ${video.currentTime.toFixed(2)} s`,
-    bitmap,
-    width: bitmap.width,
-    height: bitmap.height,
-    exif: { focal35mm: null, warning: null },
-  };
+  const name = `${page.video.name} at ${video.currentTime.toFixed(2)} s`;
+  return makeFrame(name, bitmap, null, { focal35mm: null, warning: null });
 }
 
 /**
@@ -542,7 +594,7 @@ async function run({ resizeSecond = false } = {}) {
   $('results').hidden = true;
   const started = performance.now();
   try {
-    const bitmaps = await Promise.all(page.frames.map((f) => createImageBitmap(f.bitmap)));
+    const bitmaps = await Promise.all(page.frames.map(pixelsForRun));
     const { result } = await pipeline.request('run', { frames: bitmaps, options }, bitmaps);
     const received = performance.now();
     if (!current()) {
@@ -551,6 +603,8 @@ async function run({ resizeSecond = false } = {}) {
     await showResult(result);
     const finished = performance.now();
     page.lastRun = {
+      // From the user's action (files picked, sample clicked, Reconstruct) to the result shown.
+      endToEndMs: finished - page.actionStartedAt,
       totalMs: finished - started,
       workerMs: received - started,
       showMs: finished - received,
@@ -558,6 +612,7 @@ async function run({ resizeSecond = false } = {}) {
       stagesMs: Object.fromEntries(result.report.timings_ms),
       memoryBytes: result.memoryBytes,
     };
+    page.actionStartedAt = null;
     fillTimings(result.report, page.lastRun);
     $('progress').value = 1;
     for (const item of $('stages').children) {
@@ -595,6 +650,7 @@ function failRun(error) {
 
 function cancel() {
   page.action = null;
+  page.actionStartedAt = null;
   pipeline.restart();
   resetProgress();
   setStatus('Cancelled.');
@@ -620,7 +676,7 @@ async function showResult(result) {
   drawLegend(result.legend);
   $('superpixel-count').textContent = `${result.report.superpixels.toLocaleString('en')} superpixels`;
   fillSummary(result.report);
-  page.cloud = result.cloud;
+  page.points = result.cloud.count;
   $('soup-mode').value = 'organised';
   $('results').hidden = false;
   const viewer = await viewerReady;
@@ -696,11 +752,11 @@ function fillTimings(report, run) {
 async function switchSoup() {
   const viewer = await viewerReady;
   const soup = $('soup-mode').value;
-  if (viewer === null || page.cloud === null) {
+  if (viewer === null || page.points === 0) {
     return;
   }
   try {
-    const cloud = soup === 'organised' ? page.cloud : (await pipeline.request('cloud', { soup })).cloud;
+    const { cloud } = await pipeline.request('cloud', { soup });
     showCloud(viewer, cloud);
   } catch (e) {
     if (!(e instanceof CancelledError)) {
@@ -728,14 +784,17 @@ async function download(name) {
 }
 
 // ---------------------------------------------------------------------------------------------
-// The 3D viewer (loaded beside the worker; the page works without it)
+// The 3D viewer (loaded once the worker is, so that on a slow network the worker's smaller
+// module comes first and the page is usable sooner; the page works without the viewer)
 
 const viewerReady = (async () => {
   try {
+    await pipeline.ready.catch(() => {});
     const wasm = await import('./pkg/superpixel_soup.js');
     await wasm.default();
     const viewer = await wasm.Viewer.create($('view'), { backend: BACKEND });
     page.viewer = viewer;
+    page.viewerReadyMs = performance.now();
     document.body.dataset.backend = viewer.backend;
     $('backend-name').textContent = `Drawn with ${BACKEND_NAMES[viewer.backend] ?? viewer.backend}.`;
     wireViewerControls(viewer);

@@ -16,9 +16,11 @@ export class Pipeline {
    *   onProgress(stage, fraction): progress of the running reconstruction;
    *   onReady({ version, defaults, startMs }): each time a (re)started worker has loaded its module;
    *   onFailed(message): the worker could not load its module.
+   * @param {'lean' | 'full'} module the worker's wasm build (see www/worker.js)
    */
-  constructor(handlers) {
+  constructor(handlers, module = 'lean') {
     this.handlers = handlers;
+    this.module = module;
     this.worker = null;
     this.pending = new Map();
     this.nextId = 1;
@@ -29,7 +31,11 @@ export class Pipeline {
   /** Starts a worker; `this.ready` resolves once its wasm module is loaded. */
   start() {
     const started = performance.now();
-    const worker = new Worker(new URL('./worker.js', import.meta.url), { type: 'module' });
+    const url = new URL('./worker.js', import.meta.url);
+    if (this.module !== 'lean') {
+      url.searchParams.set('module', this.module);
+    }
+    const worker = new Worker(url, { type: 'module' });
     this.worker = worker;
     this.ready = new Promise((resolve, reject) => {
       worker.onmessage = ({ data }) => {

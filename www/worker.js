@@ -1,7 +1,8 @@
 // The page's Web Worker (a module worker): loads the lean wasm build (www/pkg/soup_worker.js,
 // the library without the 3D viewer; scripts/build-web.sh) and runs the reconstruction off the
 // main thread, so the page stays responsive. The algorithm is all in wasm: this file only moves
-// pixels and results across.
+// pixels and results across. `worker.js?module=full` loads the full build instead (the page's
+// `?worker=full`; benches/page.mjs compares the two).
 //
 // Requests (each with an `id`; answered by { type: 'reply', id, ... } or { type: 'error', id, ... }):
 //   { type: 'exif', bytes: ArrayBuffer }                   → { exif: { focal35mm, warning } }
@@ -16,20 +17,31 @@
 // (out of memory, or a bug) and is unusable: the page replaces the worker. An out-of-memory abort
 // is named OutOfMemoryError.
 
-import init, * as soup from './pkg/soup_worker.js';
+const MODULES = { lean: './pkg/soup_worker.js', full: './pkg/superpixel_soup.js' };
+const soup = await import(MODULES[new URL(import.meta.url).searchParams.get('module') ?? 'lean']);
 
 /** The last reconstruction, kept in wasm memory for clouds and exports on request. */
 let current = null;
 
-/** The RGBA pixels of an ImageBitmap as a Uint8Array view (the bitmap is closed). */
-function pixels(bitmap) {
+/** Bytes of RGBA read from a canvas at a time (a few rows; a photo is never copied whole). */
+const STRIP_BYTES = 4 * 2 ** 20;
+
+/** The pixels of an ImageBitmap (closed here) in a wasm FrameBuilder, read in strips of rows. */
+function readFrame(bitmap) {
   const { width, height } = bitmap;
   const canvas = new OffscreenCanvas(width, height);
   const context = canvas.getContext('2d', { willReadFrequently: true });
   context.drawImage(bitmap, 0, 0);
   bitmap.close();
-  const data = context.getImageData(0, 0, width, height).data;
-  return { rgba: new Uint8Array(data.buffer, data.byteOffset, data.byteLength), width, height };
+  const frame = new soup.FrameBuilder(width, height);
+  const rows = Math.max(1, Math.floor(STRIP_BYTES / (4 * width)));
+  for (let y = 0; y < height; y += rows) {
+    frame.pushRows(context.getImageData(0, y, width, Math.min(rows, height - y)).data);
+  }
+  // Release the canvas's pixels now rather than at the next garbage collection.
+  canvas.width = 0;
+  canvas.height = 0;
+  return frame;
 }
 
 /** Plain object of a wasm CloudBuffers (freed), with the buffers to transfer. */
@@ -51,7 +63,7 @@ function run(id, { frames, options }) {
   const clock = performance.now();
   current?.free();
   current = null;
-  const [a, b] = frames.map(pixels);
+  const [one, two] = frames.map(readFrame);
   const pixelsMs = performance.now() - clock;
   let last = { stage: '', fraction: -1 };
   const progress = (stage, fraction) => {
@@ -62,9 +74,7 @@ function run(id, { frames, options }) {
     }
   };
   const start = performance.now();
-  current = soup.reconstruct(
-    a.rgba, a.width, a.height, b.rgba, b.width, b.height, JSON.stringify(options), progress,
-  );
+  current = soup.reconstruct(one, two, JSON.stringify(options), progress);
   const reconstructMs = performance.now() - start;
   const collect = performance.now();
   const cloud = takeCloud(current.cloud('organised'));
@@ -142,7 +152,7 @@ function describe(error) {
 
 async function main() {
   try {
-    await init();
+    await soup.default();
   } catch (e) {
     postMessage({ type: 'failed', message: `could not load the WebAssembly module: ${e.message ?? e}` });
     return;

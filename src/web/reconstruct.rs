@@ -8,7 +8,9 @@
 //! const exif = JSON.parse(readExif(fileBytes));           // { focal35mm?, warning? }
 //! const camera = JSON.parse(resolveIntrinsics(w, h, exif.focal35mm)); // shown in the form
 //! const options = { ...defaults.options, exif1: exif };
-//! const result = reconstruct(rgba1, w1, h1, rgba2, w2, h2, JSON.stringify(options),
+//! const one = new FrameBuilder(w1, h1);                   // frame 1, filled strip by strip
+//! one.pushRows(ctx.getImageData(0, y, w1, rows).data);    // … until all rows are in
+//! const result = reconstruct(one, two, JSON.stringify(options),
 //!                            (stage, fraction) => { ... });   // throws an Error named below
 //! const cloud = result.cloud('organised');                // positions1/2, colours, labels
 //! const depth = result.picture('depth');                  // RGBA, result.width × result.height
@@ -19,7 +21,7 @@
 //! `TooSmallError`, `NoParallaxError`, `InvalidParameterError`, `DecodeError`, `FormatError`)
 //! and whose message is the library's readable one.
 
-use js_sys::{Function, Uint8Array};
+use js_sys::Function;
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 
@@ -121,28 +123,80 @@ pub fn resolve_intrinsics_json(
     Ok(serde_json::to_string(&camera)?)
 }
 
-/// Reconstructs both frames: frame 1 (the reference) and frame 2 as RGBA bytes
-/// (`4 · width · height` each, e.g. a view of `ImageData.data`), `options` as JSON
-/// [`RunOptions`]. `progress(stage, fraction)`, when given, is called as stages start and finish
-/// (fraction in [0, 1] within the stage). Throws an `Error` named after the problem
+/// A frame filled from JavaScript with RGBA rows a strip at a time (e.g. from
+/// `getImageData` of a few rows), so that a large photo never sits in memory whole as RGBA.
+#[wasm_bindgen]
+pub struct FrameBuilder {
+    width: usize,
+    height: usize,
+    pixels: Vec<[u8; 3]>,
+}
+
+#[wasm_bindgen]
+impl FrameBuilder {
+    /// An empty `width × height` frame.
+    #[wasm_bindgen(constructor)]
+    pub fn new(width: u32, height: u32) -> FrameBuilder {
+        let (width, height) = (width as usize, height as usize);
+        FrameBuilder {
+            width,
+            height,
+            pixels: Vec::with_capacity(width.saturating_mul(height)),
+        }
+    }
+
+    /// Appends whole rows given as RGBA bytes, top to bottom (alpha is ignored). Throws when
+    /// the bytes are not whole rows or the frame would get too many rows.
+    #[wasm_bindgen(js_name = pushRows)]
+    pub fn push_rows(&mut self, rgba: &[u8]) -> Result<(), JsValue> {
+        let rows = rgba.len() / (4 * self.width).max(1);
+        let strip = frame_from_rgba(rgba, self.width, rows).map_err(js_error)?;
+        if self.rows() + rows > self.height {
+            return Err(js_error(Error::InvalidParameter(format!(
+                "a frame of {}×{} pixels got {} rows",
+                self.width,
+                self.height,
+                self.rows() + rows
+            ))));
+        }
+        self.pixels.extend_from_slice(strip.data());
+        Ok(())
+    }
+
+    /// Rows received so far.
+    fn rows(&self) -> usize {
+        self.pixels.len() / self.width.max(1)
+    }
+
+    /// The complete frame; fails when rows are missing.
+    fn finish(self) -> crate::Result<Frame> {
+        if self.rows() != self.height {
+            return Err(Error::InvalidParameter(format!(
+                "a frame of {}×{} pixels got only {} rows",
+                self.width,
+                self.height,
+                self.rows()
+            )));
+        }
+        crate::Grid::from_vec(self.width, self.height, self.pixels)
+    }
+}
+
+/// Reconstructs both frames: frame 1 (the reference) and frame 2 (consumed), `options` as
+/// JSON [`RunOptions`]. `progress(stage, fraction)`, when given, is called as stages start and
+/// finish (fraction in [0, 1] within the stage). Throws an `Error` named after the problem
 /// (module docs) with a readable message.
 #[wasm_bindgen]
-#[allow(clippy::too_many_arguments)] // two frames with their sizes: the JavaScript call reads plainly
 pub fn reconstruct(
-    rgba1: &Uint8Array,
-    width1: u32,
-    height1: u32,
-    rgba2: &Uint8Array,
-    width2: u32,
-    height2: u32,
+    frame1: FrameBuilder,
+    frame2: FrameBuilder,
     options: &str,
     progress: Option<Function>,
 ) -> Result<PageReconstruction, JsValue> {
     let options: RunOptions = serde_json::from_str(options)
         .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))?;
-    // One frame at a time, so only one RGBA copy is in wasm memory at once.
-    let frame1 = frame_from_js(rgba1, width1, height1).map_err(js_error)?;
-    let mut frame2 = frame_from_js(rgba2, width2, height2).map_err(js_error)?;
+    let frame1 = frame1.finish().map_err(js_error)?;
+    let mut frame2 = frame2.finish().map_err(js_error)?;
     if options.resize_second && frame2.size() != frame1.size() {
         frame2 = resize(&frame2, frame1.width(), frame1.height());
     }
@@ -175,11 +229,6 @@ pub fn reconstruct(
         frame1: pair.frame1,
         rec,
     })
-}
-
-/// A frame from a JavaScript array of RGBA bytes.
-fn frame_from_js(rgba: &Uint8Array, width: u32, height: u32) -> crate::Result<Frame> {
-    frame_from_rgba(&rgba.to_vec(), width as usize, height as usize)
 }
 
 /// A reconstruction kept in wasm memory; the worker takes what the page shows and downloads.

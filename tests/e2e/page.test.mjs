@@ -58,7 +58,7 @@ test('the sample through the file input, drawn with WebGPU, with every download'
   assert.match(await page.textContent('#thumb1-info'), /frame1\.png · 768 × 328/);
   assert.match(await page.textContent('#intrinsics-source'), /default guess/);
   assert.equal(await page.inputValue('#params [name="fx"]'), '768');
-  const count = await page.evaluate(() => window.soupPage.cloud.count);
+  const count = await page.evaluate(() => window.soupPage.points);
   assert.ok(count > 0.8 * SAMPLE_SIZE[0] * SAMPLE_SIZE[1], `${count} points`);
   const summary = await page.textContent('#summary');
   assert.match(summary, /Working size768 × 328/);
@@ -251,7 +251,7 @@ test('two frames picked from a video', async () => {
   await page.waitForFunction((t) => document.querySelector('#thumb2-info').textContent.includes(`at ${t} s`), end.toFixed(2));
   await page.click('#run-button');
   assert.equal(await waitForRunEnd(page), 'done', await alertText(page));
-  assert.ok((await page.evaluate(() => window.soupPage.cloud.count)) > 100_000);
+  assert.ok((await page.evaluate(() => window.soupPage.points)) > 100_000);
   assert.deepEqual(errors, []);
   await page.context().close();
 });
