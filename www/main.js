@@ -674,7 +674,7 @@ async function showResult(result) {
   draw('picture-superpixels', result.pictures.superpixels);
   draw('picture-flow', result.pictures.flow);
   drawLegend(result.legend);
-  $('superpixel-count').textContent = `${result.report.superpixels.toLocaleString('en')} superpixels`;
+  $('superpixel-count').textContent = result.report.superpixels.toLocaleString('en');
   fillSummary(result.report);
   page.points = result.cloud.count;
   $('soup-mode').value = 'organised';
