@@ -6,7 +6,7 @@ mod common;
 
 use superpixel_soup::flow::is_known;
 use superpixel_soup::output::{dense_depth, point_clouds};
-use superpixel_soup::soup::arap::{ScaleParams, solve_scales};
+use superpixel_soup::soup::arap::{ScaleInputs, ScaleParams, solve_scales};
 use superpixel_soup::soup::init::{InitParams, unit_scale_soup};
 use superpixel_soup::superpixels::graph::{boundary_graph, knn_graph};
 use superpixel_soup::superpixels::{SlicParams, slic};
@@ -28,6 +28,13 @@ fn main() {
         let k = s.intrinsics;
         let params = InitParams::default();
         let scales = ScaleParams::default();
+        let inputs = ScaleInputs {
+            superpixels: &sp,
+            knn: &knn,
+            boundaries: &boundaries,
+            flow: &s.flow12,
+            intrinsics: &k,
+        };
         let init = || unit_scale_soup(&sp, &knn, &adjacency, &s.flow12, &reliable, &k, &params);
         let times = common::time_ms(3, init);
         common::print_row(
@@ -38,7 +45,7 @@ fn main() {
         let Ok(unit) = init() else { return };
         let times = common::time_ms(3, || {
             let mut soup = unit.clone();
-            solve_scales(&mut soup, &sp, &knn, &boundaries, &s.flow12, &k, &scales)
+            solve_scales(&mut soup, &inputs, &scales)
         });
         common::print_row(
             &format!("ARAP scales ({})", kind.name()),
@@ -46,7 +53,7 @@ fn main() {
             &times,
         );
         let mut soup = unit.clone();
-        solve_scales(&mut soup, &sp, &knn, &boundaries, &s.flow12, &k, &scales);
+        solve_scales(&mut soup, &inputs, &scales);
         let times = common::time_ms(3, || {
             let depth = dense_depth(&soup, &sp.labels, &k);
             point_clouds(&soup, &sp.labels, &depth, &s.frame1, &k)

@@ -55,6 +55,29 @@ pub fn cloud_labels(labels: &Grid<u32>, depth: &Grid<f32>) -> Vec<u32> {
         .collect()
 }
 
+/// Scene flow per pixel of frame 1 at the working resolution: X' − X with X = z x̄ (camera-1
+/// coordinates) and X' = R X + λ t̂ its position after the piece's motion (camera-2
+/// coordinates), as DESIGN.md stage 6 defines it (for a static point this is the camera motion's
+/// effect, not zero). NaN where the pixel has no depth.
+pub fn scene_flow(
+    soup: &Soup,
+    labels: &Grid<u32>,
+    depth: &Grid<f32>,
+    k: &Intrinsics,
+) -> Grid<[f32; 3]> {
+    Grid::from_fn(labels.width(), labels.height(), |x, y| {
+        let z = *depth.get(x, y);
+        if !has_point(z) {
+            return [f32::NAN; 3];
+        }
+        let z = z as f64;
+        let piece = &soup.pieces[*labels.get(x, y) as usize];
+        let p = Vector3::from(k.ray(x as f64, y as f64)) * z;
+        let d = piece.r * p + piece.t_hat * piece.lambda - p;
+        [d.x as f32, d.y as f32, d.z as f32]
+    })
+}
+
 /// Point clouds of frame 1 (X = z x̄, camera-1 coordinates) and frame 2 (X' = R X + λ t̂, each
 /// point moved by its piece's motion, i.e. camera-2 coordinates), one point per pixel with a
 /// depth, coloured from frame 1. X' − X is the scene flow plus the camera motion.

@@ -10,9 +10,9 @@ use crate::flow::{FlowField, FlowParams, compute_flow, is_known, resize_flow};
 use crate::formats::ply::PointCloud;
 use crate::grid::Grid;
 use crate::input::FramePair;
-use crate::output::{dense_depth, depth_at, point_clouds};
+use crate::output::{dense_depth, depth_at, point_clouds, scene_flow};
 use crate::soup::Soup;
-use crate::soup::arap::{ArapReport, ScaleParams, solve_scales};
+use crate::soup::arap::{ArapReport, ScaleInputs, ScaleParams, solve_scales};
 use crate::soup::init::{InitParams, unit_scale_soup};
 use crate::superpixels::graph::{BoundaryGraph, KnnGraph, boundary_graph, knn_graph};
 use crate::superpixels::{SlicParams, Superpixels, slic};
@@ -127,6 +127,8 @@ pub struct Reconstruction {
     pub depth_input: Grid<f32>,
     pub cloud1: PointCloud,
     pub cloud2: PointCloud,
+    /// Per pixel of frame 1 (working resolution): X' − X, NaN where unknown.
+    pub scene_flow: Grid<[f32; 3]>,
     pub report: Report,
 }
 
@@ -181,7 +183,14 @@ pub fn reconstruct(
 
     progress(Stage::Scales, 0.0);
     let mut soup = unit_soup.clone();
-    let arap = solve_scales(&mut soup, &sp, &knn, &boundaries, &flow, &k, &params.scales);
+    let inputs = ScaleInputs {
+        superpixels: &sp,
+        knn: &knn,
+        boundaries: &boundaries,
+        flow: &flow,
+        intrinsics: &k,
+    };
+    let arap = solve_scales(&mut soup, &inputs, &params.scales);
     timings.push((Stage::Scales, clock.lap()));
 
     progress(Stage::Outputs, 0.0);
@@ -191,6 +200,7 @@ pub fn reconstruct(
     let k_input = k.scaled(1.0 / sx, 1.0 / sy);
     let depth_input = depth_at(&soup, &sp.labels, iw, ih, &k_input);
     let (cloud1, cloud2) = point_clouds(&soup, &sp.labels, &depth, &pair.frame1, &k);
+    let scene_flow = scene_flow(&soup, &sp.labels, &depth, &k);
     timings.push((Stage::Outputs, clock.lap()));
     progress(Stage::Outputs, 1.0);
 
@@ -224,6 +234,7 @@ pub fn reconstruct(
         depth,
         depth_input,
         cloud1,
+        scene_flow,
         cloud2,
         report,
     })

@@ -9,7 +9,7 @@ use superpixel_soup::geometry::essential::Motion;
 use superpixel_soup::grid::Grid;
 use superpixel_soup::image::{ExifInfo, Frame, LoadedImage};
 use superpixel_soup::input::prepare_pair;
-use superpixel_soup::soup::arap::{ScaleParams, solve_scales};
+use superpixel_soup::soup::arap::{ScaleInputs, ScaleParams, solve_scales};
 use superpixel_soup::soup::{Piece, Soup};
 use superpixel_soup::superpixels::graph::{BoundaryGraph, knn_graph};
 use superpixel_soup::superpixels::{Segment, Superpixels};
@@ -80,15 +80,14 @@ fn arap_recovers_the_relative_scale_of_two_bodies() {
     // No touching boundaries: the K-NN (ARAP) terms alone decide.
     let boundaries = BoundaryGraph { edges: Vec::new() };
     let flow = Grid::filled(100, 100, [0.0f32, 0.0]);
-    let report = solve_scales(
-        &mut soup,
-        &sp,
-        &knn,
-        &boundaries,
-        &flow,
-        &K,
-        &ScaleParams::default(),
-    );
+    let inputs = ScaleInputs {
+        superpixels: &sp,
+        knn: &knn,
+        boundaries: &boundaries,
+        flow: &flow,
+        intrinsics: &K,
+    };
+    let report = solve_scales(&mut soup, &inputs, &ScaleParams::default());
     let (a, b) = (&soup.pieces[..], &soup.pieces[5..]);
     let lambda_a: Vec<f64> = (0..10)
         .flat_map(|j| (0..5).map(move |i| j * 10 + i))
@@ -152,6 +151,30 @@ fn synthetic_scenes_with_exact_flow() {
         assert!(m.mre < bound, "{}: MRE {}", kind.name(), m.mre);
         assert!(m.coverage > 0.95);
         assert_eq!(rec.cloud1.positions.len(), rec.cloud2.positions.len());
+        // Frame 2's points project where the flow says: X' = X + scene flow lands on x + f(x).
+        let k = rec.report.camera.intrinsics;
+        let mut errors: Vec<f64> = Vec::new();
+        for y in (0..rec.depth.height()).step_by(7) {
+            for x in (0..rec.depth.width()).step_by(7) {
+                let z = *rec.depth.get(x, y) as f64;
+                let d = rec.scene_flow.get(x, y);
+                if !z.is_finite() || !d[0].is_finite() {
+                    continue;
+                }
+                let p = Vector3::from(k.ray(x as f64, y as f64)) * z;
+                let q = p + Vector3::new(d[0] as f64, d[1] as f64, d[2] as f64);
+                let [u, v] = k.project([q.x, q.y, q.z]);
+                let f = rec.flow.get(x, y);
+                errors.push((u - x as f64 - f[0] as f64).hypot(v - y as f64 - f[1] as f64));
+            }
+        }
+        errors.sort_by(f64::total_cmp);
+        let median = errors[errors.len() / 2];
+        assert!(
+            median < 0.5,
+            "{}: median reprojection {median} px",
+            kind.name()
+        );
         assert!(rec.report.arap.energy_end <= rec.report.arap.energy_start);
     }
 }

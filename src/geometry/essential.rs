@@ -1,9 +1,9 @@
 //! The essential matrix E = [t]ₓ R on normalised coordinates (x̄'ᵀ E x̄ = 0): linear estimation,
 //! decomposition into a rigid motion with the cheirality test, and the Sampson error.
 
-use nalgebra::{Matrix3, SMatrix, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, Vector3};
 
-use super::{Correspondence, conditioning, skew, triangulate};
+use super::{Correspondence, dlt, skew, triangulate};
 
 /// A rigid motion X' = R X + t̂ with unit translation direction t̂ (scale unknown).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -26,13 +26,9 @@ pub fn eight_point(points: &[Correspondence]) -> Option<Matrix3<f64>> {
     if points.len() < 8 {
         return None;
     }
-    // Hartley conditioning: centre each image's points and scale them to mean distance √2.
-    let t1 = conditioning(points.iter().map(|c| c.x1));
-    let t2 = conditioning(points.iter().map(|c| c.x2));
-    let mut ata = SMatrix::<f64, 9, 9>::zeros();
-    for c in points {
-        let (a, b) = (t1 * c.x1, t2 * c.x2);
-        let row = SMatrix::<f64, 9, 1>::from_column_slice(&[
+    // One row per correspondence: b = x̄'ᵀ E a = 0 in E's entries, row by row.
+    let (e, t1, t2) = dlt(points, |a, b| {
+        [[
             b.x * a.x,
             b.x * a.y,
             b.x * a.z,
@@ -42,18 +38,9 @@ pub fn eight_point(points: &[Correspondence]) -> Option<Matrix3<f64>> {
             b.z * a.x,
             b.z * a.y,
             b.z * a.z,
-        ]);
-        ata += row * row.transpose();
-    }
-    let eigen = SymmetricEigen::new(ata);
-    let (smallest, _) = eigen
-        .eigenvalues
-        .iter()
-        .enumerate()
-        .min_by(|a, b| a.1.total_cmp(b.1))?;
-    let e = eigen.eigenvectors.column(smallest);
-    let e =
-        t2.transpose() * Matrix3::new(e[0], e[1], e[2], e[3], e[4], e[5], e[6], e[7], e[8]) * t1;
+        ]]
+    })?;
+    let e = t2.transpose() * e * t1;
     let svd = e.svd(true, true);
     let (u, v_t) = (svd.u?, svd.v_t?);
     let projected = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, 0.0)) * v_t;
@@ -168,7 +155,7 @@ pub fn robust_motion(
                 MinimalSolver::FivePoint => 5,
                 MinimalSolver::EightPoint => pool.len().min(24),
             },
-            iterations: 30,
+            iterations: iterations.clamp(10, 30),
             threshold: to_normalised(px),
         };
         let (e, next) = ransac(

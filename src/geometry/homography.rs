@@ -5,10 +5,10 @@
 //! X' = (R + t mᵀ) X and x̄' ∝ H x̄ with H = R + t mᵀ. (Hartley–Zisserman write R − t nᵀ/d for
 //! their plane nᵀX + d = 0; the two agree with n ↦ −n.)
 
-use nalgebra::{Matrix3, SMatrix, SymmetricEigen, Vector3};
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
 use super::essential::Motion;
-use super::{Correspondence, conditioning};
+use super::{Correspondence, dlt};
 
 /// Least-squares homography with x̄' ∝ H x̄ from ≥ 4 correspondences (direct linear transform on
 /// Hartley-conditioned points), scaled to unit Frobenius norm. `None` for fewer than four points
@@ -17,48 +17,33 @@ pub fn homography_dlt(points: &[Correspondence]) -> Option<Matrix3<f64>> {
     if points.len() < 4 {
         return None;
     }
-    let t1 = conditioning(points.iter().map(|c| c.x1));
-    let t2 = conditioning(points.iter().map(|c| c.x2));
-    let mut ata = SMatrix::<f64, 9, 9>::zeros();
-    for c in points {
-        let (a, b) = (t1 * c.x1, t2 * c.x2);
-        // Rows of b × (H a) = 0 (two independent ones), H flattened row by row.
-        let r1 = SMatrix::<f64, 9, 1>::from_column_slice(&[
-            0.0,
-            0.0,
-            0.0,
-            -b.z * a.x,
-            -b.z * a.y,
-            -b.z * a.z,
-            b.y * a.x,
-            b.y * a.y,
-            b.y * a.z,
-        ]);
-        let r2 = SMatrix::<f64, 9, 1>::from_column_slice(&[
-            b.z * a.x,
-            b.z * a.y,
-            b.z * a.z,
-            0.0,
-            0.0,
-            0.0,
-            -b.x * a.x,
-            -b.x * a.y,
-            -b.x * a.z,
-        ]);
-        ata += r1 * r1.transpose() + r2 * r2.transpose();
-    }
-    if ata.iter().any(|v| !v.is_finite()) {
-        return None;
-    }
-    let eigen = SymmetricEigen::new(ata);
-    let mut order: Vec<usize> = (0..9).collect();
-    order.sort_by(|&i, &j| eigen.eigenvalues[i].total_cmp(&eigen.eigenvalues[j]));
-    // A unique solution needs a one-dimensional null space.
-    if eigen.eigenvalues[order[1]] <= 1e-10 * eigen.eigenvalues[order[8]].max(1e-300) {
-        return None;
-    }
-    let h = eigen.eigenvectors.column(order[0]);
-    let h = Matrix3::new(h[0], h[1], h[2], h[3], h[4], h[5], h[6], h[7], h[8]);
+    // Two independent rows of b × (H a) = 0 per correspondence, H flattened row by row.
+    let (h, t1, t2) = dlt(points, |a, b| {
+        [
+            [
+                0.0,
+                0.0,
+                0.0,
+                -b.z * a.x,
+                -b.z * a.y,
+                -b.z * a.z,
+                b.y * a.x,
+                b.y * a.y,
+                b.y * a.z,
+            ],
+            [
+                b.z * a.x,
+                b.z * a.y,
+                b.z * a.z,
+                0.0,
+                0.0,
+                0.0,
+                -b.x * a.x,
+                -b.x * a.y,
+                -b.x * a.z,
+            ],
+        ]
+    })?;
     let h = t2.try_inverse()? * h * t1;
     let norm = h.norm();
     (norm > 0.0 && h.iter().all(|v| v.is_finite())).then(|| h / norm)

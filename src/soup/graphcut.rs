@@ -76,6 +76,10 @@ pub fn energy(
     e + label_cost as f64 * used.iter().filter(|&&u| u).count() as f64
 }
 
+/// An expansion is only tried when some node's cost for the label is within this of its
+/// current cost.
+const PROMISING: f32 = 0.25;
+
 /// Improves `labels` by expansion moves, trying labels in `order`, sweeping until no move lowers
 /// the energy (at most `sweeps` times). Nodes whose cost for the expanding label is `max_cost` or
 /// more never switch to it (they would pay the full cap: this keeps each move's graph small).
@@ -94,6 +98,14 @@ pub fn alpha_expansion(
     for _ in 0..sweeps {
         let mut changed = false;
         for &alpha in order {
+            // A label no node likes (nearly) as much as its own cannot win a region: skip the cut.
+            let promising = labels
+                .iter()
+                .enumerate()
+                .any(|(i, &l)| l != alpha && costs.get(i, alpha) <= costs.get(i, l) + PROMISING);
+            if !promising {
+                continue;
+            }
             let Some(candidate) =
                 expansion_move(costs, neighbours, label_cost, alpha, max_cost, labels)
             else {

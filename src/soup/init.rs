@@ -49,6 +49,10 @@ pub struct InitParams {
     pub smoothness_px: f64,
     /// Cost of each hypothesis in use (px of mean transfer error, summed over superpixels).
     pub label_cost_px: f64,
+    /// A region of one hypothesis joins a touching region's hypothesis when that explains it at
+    /// most this much worse on average (px per superpixel): large regions whose motions differ
+    /// only by the flow's systematic errors are one motion (see [`merge_similar`]).
+    pub merge_px: f64,
     /// A superpixel's depth counts as observed when its translation moves it by this much (px).
     pub min_parallax_px: f64,
     /// Seed of the RANSAC sampling.
@@ -60,11 +64,12 @@ impl Default for InitParams {
         InitParams {
             samples_per_superpixel: 32,
             global_iterations: 300,
-            local_iterations: 30,
-            max_local_hypotheses: 80,
+            local_iterations: 20,
+            max_local_hypotheses: 40,
             explain_px: 0.5,
             smoothness_px: 0.2,
             label_cost_px: 12.0,
+            merge_px: 0.6,
             min_parallax_px: 0.05,
             seed: 2017,
         }
@@ -106,11 +111,14 @@ pub fn unit_scale_soup(
         focal,
         hypotheses: Vec::new(),
         costs: CostTable::new(sp.len()),
+        everywhere: Vec::new(),
+        deadband: 0.0,
     };
     for motion in global_hypotheses(&all, focal, params, &mut rng)? {
         fit.add(motion, None);
     }
     add_local_hypotheses(&mut fit, knn, params, &mut rng);
+    fit.set_noise();
 
     let neighbours: Vec<Vec<(u32, f32)>> = adjacency
         .iter()
@@ -127,11 +135,12 @@ pub fn unit_scale_soup(
             &fit.costs,
             &neighbours,
             params.label_cost_px as f32,
-            CAP_PX as f32,
+            fit.cap(),
             &order,
             &mut assignment,
-            4,
+            2,
         );
+        merge_similar(&fit.costs, adjacency, params.merge_px, &mut assignment);
         if !fit.refit(&assignment) {
             break;
         }
@@ -143,20 +152,77 @@ pub fn unit_scale_soup(
     })
 }
 
+/// Joins whole regions of one hypothesis into a touching hypothesis that explains them at most
+/// `merge_px` worse per superpixel on average, smallest region first, until none qualifies.
+/// The label cost alone cannot do this for large regions: on a static scene with computed flow,
+/// local motions fitted to the flow's regional biases each beat the camera motion by a little on
+/// hundreds of superpixels, which splits one rigid scene into several groups of different scale.
+fn merge_similar(costs: &CostTable, adjacency: &[Vec<u32>], merge_px: f64, labels: &mut [usize]) {
+    loop {
+        let mut members = vec![Vec::new(); costs.labels()];
+        labels
+            .iter()
+            .enumerate()
+            .for_each(|(i, &l)| members[l].push(i));
+        let mut used: Vec<usize> = (0..members.len())
+            .filter(|&l| !members[l].is_empty())
+            .collect();
+        used.sort_by_key(|&l| (members[l].len(), l));
+        let mut merged = false;
+        for &h in &used {
+            let mut touching: Vec<usize> = members[h]
+                .iter()
+                .flat_map(|&i| adjacency[i].iter().map(|&k| labels[k as usize]))
+                .filter(|&g| g != h)
+                .collect();
+            touching.sort_unstable();
+            touching.dedup();
+            let worse = |g: usize| {
+                members[h]
+                    .iter()
+                    .map(|&i| (costs.get(i, g) - costs.get(i, h)) as f64)
+                    .sum::<f64>()
+                    / members[h].len() as f64
+            };
+            let best = touching
+                .into_iter()
+                .map(|g| (worse(g), g))
+                .min_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            if let Some((loss, g)) = best
+                && loss <= merge_px
+            {
+                members[h].iter().for_each(|&i| labels[i] = g);
+                merged = true;
+                break;
+            }
+        }
+        if !merged {
+            return;
+        }
+    }
+}
+
 /// The hypotheses found so far and their data costs on every superpixel.
 struct Fitting<'a> {
     samples: &'a [Vec<Correspondence>],
     focal: f64,
     hypotheses: Vec<Motion>,
     costs: CostTable,
+    /// Per hypothesis: evaluated on every superpixel (not only near its seed).
+    everywhere: Vec<bool>,
+    /// Costs at or below this many px count as zero: differences within the flow's noise (and
+    /// the planar approximation's) say nothing about which motion is right, and without the
+    /// deadband a hypothesis fitted to a region's noise would win it. See [`Fitting::set_noise`].
+    deadband: f64,
 }
 
 impl Fitting<'_> {
     /// Adds a hypothesis, evaluated on the superpixels in `near` (all when `None`; the rest get
     /// the capped cost). Returns its index.
     fn add(&mut self, motion: Motion, near: Option<&[usize]>) -> usize {
-        let h = self.costs.push_label(CAP_PX as f32);
+        let h = self.costs.push_label(self.cap());
         self.hypotheses.push(motion);
+        self.everywhere.push(near.is_none());
         match near {
             Some(list) => list.iter().for_each(|&i| self.evaluate(i, h)),
             None => (0..self.samples.len()).for_each(|i| self.evaluate(i, h)),
@@ -170,7 +236,34 @@ impl Fitting<'_> {
         } else {
             planar_cost(&self.samples[i], &self.hypotheses[h], self.focal, CAP_PX)
         };
-        self.costs.set(i, h, cost as f32);
+        self.costs.set(i, h, (cost - self.deadband).max(0.0) as f32);
+    }
+
+    /// The cost of a superpixel a hypothesis does not explain at all (after the deadband).
+    fn cap(&self) -> f32 {
+        (CAP_PX - self.deadband) as f32
+    }
+
+    /// Estimates the noise floor from the hypotheses so far: twice the 30th percentile of each
+    /// superpixel's best cost (the well-explained superpixels' residual), at most 1 px. Costs
+    /// are then re-evaluated with it as their deadband.
+    fn set_noise(&mut self) {
+        let mut best: Vec<f32> = (0..self.samples.len())
+            .filter(|&i| !self.samples[i].is_empty())
+            .map(|i| self.best(i))
+            .collect();
+        if best.is_empty() {
+            return;
+        }
+        let at = best.len() / 10;
+        let (_, q, _) = best.select_nth_unstable_by(at, f32::total_cmp);
+        self.deadband = (2.0 * *q as f64).min(1.0);
+        for h in 0..self.hypotheses.len() {
+            for i in 0..self.samples.len() {
+                let c = self.costs.get(i, h) as f64;
+                self.costs.set(i, h, (c - self.deadband).max(0.0) as f32);
+            }
+        }
     }
 
     /// The best data cost of superpixel i over all hypotheses.
@@ -194,7 +287,7 @@ impl Fitting<'_> {
                 if (c as f64) < explain_px {
                     *s += 1;
                 }
-                if c <= best + 0.05 && c < CAP_PX as f32 {
+                if c <= best + 0.05 && c < self.cap() {
                     best_somewhere[h] = true;
                 }
             }
@@ -226,16 +319,16 @@ impl Fitting<'_> {
                 .flat_map(|&i| self.samples[i].iter().copied())
                 .filter(|c| sampson(&e, c) < loose)
                 .collect();
-            let stride = points.len().div_ceil(2000).max(1);
+            let stride = points.len().div_ceil(600).max(1);
             let points: Vec<Correspondence> = points.into_iter().step_by(stride).collect();
             // Points off one plane pin the motion down: re-estimate it linearly. On one plane a
             // linear estimate is degenerate: only polish the current motion.
             let candidate = if is_planar(&points, self.focal) {
-                refine_motion(&points, &self.hypotheses[h], 10)
+                refine_motion(&points, &self.hypotheses[h], 6)
             } else {
                 eight_point(&points)
                     .and_then(|e| decompose(&e, &points))
-                    .map(|m| refine_motion(&points, &m, 10))
+                    .map(|m| refine_motion(&points, &m, 6))
                     .unwrap_or(self.hypotheses[h])
             };
             let cost = |m: &Motion| {
@@ -244,12 +337,16 @@ impl Fitting<'_> {
                     .map(|&i| planar_cost(&self.samples[i], m, self.focal, CAP_PX))
                     .sum::<f64>()
             };
-            if cost(&candidate) < cost(&self.hypotheses[h]) - 1e-6 {
+            let better = cost(&candidate) < cost(&self.hypotheses[h]) - 1e-6;
+            if better {
                 self.hypotheses[h] = candidate;
                 changed = true;
             }
             // Used hypotheses are known everywhere from now on.
-            (0..self.samples.len()).for_each(|i| self.evaluate(i, h));
+            if better || !self.everywhere[h] {
+                (0..self.samples.len()).for_each(|i| self.evaluate(i, h));
+                self.everywhere[h] = true;
+            }
         }
         changed
     }
@@ -433,7 +530,7 @@ fn add_local_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams, 
     }
 }
 
-/// The plane of every superpixel under its assigned motion, from up to 150 of its pixels.
+/// The plane of every superpixel under its assigned motion, from up to 100 of its pixels.
 fn fit_planes(
     sp: &Superpixels,
     flow: &FlowField,
@@ -444,7 +541,7 @@ fn fit_planes(
     params: &InitParams,
 ) -> Vec<Piece> {
     let focal = (k.fx * k.fy).sqrt();
-    sample_correspondences(sp, flow, reliable, k, 150)
+    sample_correspondences(sp, flow, reliable, k, 100)
         .iter()
         .zip(assignment)
         .map(|(points, &h)| {

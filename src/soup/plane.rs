@@ -92,7 +92,7 @@ pub fn fit_plane(
     }
     let mut weights = vec![1.0; points.len()];
     let mut m = Vector3::zeros();
-    for _ in 0..5 {
+    for _ in 0..4 {
         let (ata, atb) = normal_equations(points, motion, weights.iter().copied());
         let eig = ata.symmetric_eigenvalues();
         let (lo, hi) = (eig.min(), eig.max());

@@ -13,7 +13,7 @@ use superpixel_soup::grid::Grid;
 use superpixel_soup::image::{ExifInfo, LoadedImage};
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
 use superpixel_soup::output::depth_at;
-use superpixel_soup::soup::arap::scale_energy;
+use superpixel_soup::soup::arap::{ScaleInputs, scale_energy};
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
 
 /// Run the reconstruction on cases in the evaluation layout and score the depth.
@@ -213,17 +213,15 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
             1.0
         };
     }
-    let energy = |soup: &superpixel_soup::soup::Soup| {
-        scale_energy(
-            soup,
-            &rec.superpixels,
-            &rec.knn,
-            &rec.boundaries,
-            &rec.flow,
-            &rec.report.camera.intrinsics,
-            &rec.report.params.scales,
-        )
+    let inputs = ScaleInputs {
+        superpixels: &rec.superpixels,
+        knn: &rec.knn,
+        boundaries: &rec.boundaries,
+        flow: &rec.flow,
+        intrinsics: &rec.report.camera.intrinsics,
     };
+    let energy =
+        |soup: &superpixel_soup::soup::Soup| scale_energy(soup, &inputs, &rec.report.params.scales);
     println!(
         "scale energy: solved {:.3}, oracle scales {:.3}",
         energy(&rec.soup),
