@@ -83,6 +83,9 @@ step "setup" - scripts/setup.sh
 step "cargo fmt --check" - cargo fmt --all -- --check
 step "clippy (native)" - cargo clippy --all-targets -- -D warnings
 step "clippy (wasm32)" - cargo clippy --all-targets --target wasm32-unknown-unknown -- -D warnings
+# The worker's lean module (scripts/build-web.sh) is the library without the `viewer` feature.
+step "clippy (wasm32, worker build)" - \
+    cargo clippy --lib --target wasm32-unknown-unknown --no-default-features -- -D warnings
 step "cargo test (native)" count_cargo cargo test
 step "wasm release build + wasm-bindgen" - scripts/build-web.sh
 # Every test target is built for wasm32 and run by wasm-bindgen-test-runner; only

@@ -2,8 +2,9 @@
 """Static file server for the Superpixel Soup page (Python standard library only).
 
 Serves a folder (default: the repository root) with the right Content-Type for wasm and ES
-modules, the cross-origin isolation headers that wasm threads (SharedArrayBuffer) need, and no
-caching, so a rebuilt module is always picked up.
+modules, the cross-origin isolation headers that wasm threads (SharedArrayBuffer) need, gzip
+for text and wasm when the browser accepts it (as web hosts do; the wasm modules shrink to about
+a third), and no caching without revalidation, so a rebuilt module is always picked up.
 
     python3 scripts/serve.py [--port PORT] [--bind ADDRESS] [--dir FOLDER]
 
@@ -12,8 +13,11 @@ Port 0 picks a free port. The first line printed starts `serving http://HOST:POR
 """
 
 import argparse
+import email.utils
 import functools
+import gzip
 import http.server
+import io
 import os
 import sys
 
@@ -31,6 +35,44 @@ class Handler(http.server.SimpleHTTPRequestHandler):
         ".html": "text/html; charset=utf-8",
         ".svg": "image/svg+xml",
     }
+
+    # Sent gzip-compressed when the request accepts it.
+    compressible = {".wasm", ".js", ".mjs", ".css", ".html", ".json", ".svg", ".txt"}
+    # (path, modification time, size) -> compressed bytes, shared by all requests.
+    gzip_cache = {}
+
+    def send_head(self):
+        path = self.translate_path(self.path)
+        if os.path.isdir(path) and self.path.split("?")[0].endswith("/"):
+            path = os.path.join(path, "index.html")
+        accepts_gzip = "gzip" in self.headers.get("Accept-Encoding", "")
+        if not (accepts_gzip and os.path.isfile(path)
+                and os.path.splitext(path)[1] in self.compressible):
+            return super().send_head()
+        stat = os.stat(path)
+        since = self.headers.get("If-Modified-Since")
+        if since is not None:
+            try:
+                if int(stat.st_mtime) <= email.utils.parsedate_to_datetime(since).timestamp():
+                    self.send_response(http.server.HTTPStatus.NOT_MODIFIED)
+                    self.end_headers()
+                    return None
+            except (TypeError, ValueError, OverflowError):
+                pass  # ill-formed date: send the file
+        key = (path, stat.st_mtime_ns, stat.st_size)
+        body = self.gzip_cache.get(key)
+        if body is None:
+            with open(path, "rb") as f:
+                body = gzip.compress(f.read(), compresslevel=6)
+            self.gzip_cache[key] = body
+        self.send_response(http.server.HTTPStatus.OK)
+        self.send_header("Content-Type", self.guess_type(path))
+        self.send_header("Content-Encoding", "gzip")
+        self.send_header("Content-Length", str(len(body)))
+        self.send_header("Vary", "Accept-Encoding")
+        self.send_header("Last-Modified", self.date_time_string(stat.st_mtime))
+        self.end_headers()
+        return io.BytesIO(body)
 
     def end_headers(self):
         self.send_header("Cross-Origin-Opener-Policy", "same-origin")

@@ -7,8 +7,10 @@ use crate::grid::Grid;
 /// An 8-bit sRGB colour frame; element (u, v) is `[red, green, blue]`.
 pub type Frame = Grid<[u8; 3]>;
 
-/// What the EXIF block of a photo told us.
-#[derive(Clone, Debug, Default, PartialEq)]
+/// What the EXIF block of a photo told us. In JSON (the web page's worker messages) the fields
+/// are `focal35mm` and `warning`.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase", default)]
 pub struct ExifInfo {
     /// 35 mm-equivalent focal length in millimetres (`FocalLengthIn35mmFilm`), when present and positive.
     pub focal_35mm: Option<f64>,
@@ -58,6 +60,34 @@ pub fn read_image_file(path: &std::path::Path) -> Result<LoadedImage> {
         Error::Decode(reason) => Error::Decode(format!("{}: {reason}", path.display())),
         other => other,
     })
+}
+
+/// Reads only the EXIF block of image file bytes (no pixel decoding), for callers whose pixels
+/// come from elsewhere (the web page decodes with the browser). Never fails: a file without a
+/// block, or of a kind that carries none (anything but JPEG, PNG, WebP, TIFF and AVIF), gives
+/// [`ExifInfo::default`]; a broken block gives a [`warning`](ExifInfo::warning).
+pub fn read_exif_info(bytes: &[u8]) -> ExifInfo {
+    use image::ImageFormat::{Avif, Jpeg, Png, Tiff, WebP};
+    match image::guess_format(bytes) {
+        Ok(Jpeg | Png | WebP | Tiff | Avif) => read_exif(bytes).1,
+        _ => ExifInfo::default(),
+    }
+}
+
+/// A frame from RGBA bytes, row by row from the top (`4 · width · height` of them, as a canvas's
+/// `getImageData` gives them); alpha is ignored. Errors: [`Error::InvalidParameter`] for any
+/// other length.
+pub fn frame_from_rgba(rgba: &[u8], width: usize, height: usize) -> Result<Frame> {
+    let expected = width.checked_mul(height).and_then(|n| n.checked_mul(4));
+    if expected != Some(rgba.len()) {
+        return Err(Error::InvalidParameter(format!(
+            "an RGBA frame of {width}×{height} pixels has {} bytes, got {}",
+            4 * width as u128 * height as u128,
+            rgba.len()
+        )));
+    }
+    let pixels = rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
+    Grid::from_vec(width, height, pixels)
 }
 
 /// Fails unless the JPEG's marker structure runs from SOI to EOI. The decoder itself fills a
@@ -309,6 +339,30 @@ mod tests {
         let truncated = &png[..png.len() / 2];
         assert!(matches!(decode_image(truncated), Err(Error::Decode(_))));
         assert!(matches!(decode_image(&[]), Err(Error::Decode(_))));
+    }
+
+    #[test]
+    fn rgba_bytes_become_rgb_frames() {
+        let rgba = [1, 2, 3, 255, 4, 5, 6, 0, 7, 8, 9, 9, 10, 11, 12, 128];
+        let frame = frame_from_rgba(&rgba, 2, 2).unwrap();
+        assert_eq!(
+            frame.data(),
+            &[[1, 2, 3], [4, 5, 6], [7, 8, 9], [10, 11, 12]]
+        );
+        let err = frame_from_rgba(&rgba[..12], 2, 2).unwrap_err();
+        assert!(err.to_string().contains("has 16 bytes, got 12"), "{err}");
+        assert!(frame_from_rgba(&[], usize::MAX, 2).is_err());
+    }
+
+    #[test]
+    fn exif_of_a_png_without_one_is_empty() {
+        let png = encode_png(&checker(8, 8)).unwrap();
+        assert_eq!(read_exif_info(&png), ExifInfo::default());
+        assert_eq!(read_exif_info(b"not an image"), ExifInfo::default());
+        assert_eq!(
+            read_exif_info(b"GIF89a\x01\x00\x01\x00"),
+            ExifInfo::default()
+        );
     }
 
     #[test]

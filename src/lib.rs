@@ -3,13 +3,15 @@
 //!
 //! Data flows one way through plain functions, one module per stage:
 //! frames ([`image`], [`input`], [`camera`]) → flow ([`flow`]) → superpixels and graphs →
-//! unit-scale soup → scaled soup → outputs. [`formats`] reads and writes the files,
+//! unit-scale soup → scaled soup → outputs. [`formats`] reads and writes the files, [`export`]
+//! encodes a reconstruction's output files,
 //! [`eval`] scores results, [`synth`] renders scenes with exact ground truth.
 
 pub mod camera;
 pub mod colormap;
 pub mod error;
 pub mod eval;
+pub mod export;
 pub mod flow;
 pub mod formats;
 pub mod geometry;

@@ -38,6 +38,23 @@ pub fn depth_at(
     })
 }
 
+/// Whether [`point_clouds`] makes a point of a pixel with depth `z`: finite and in front.
+fn has_point(z: f32) -> bool {
+    z.is_finite() && z > 0.0
+}
+
+/// The superpixel label of each point of [`point_clouds`] (same depth map, same order: pixels
+/// row by row, those without a depth left out), e.g. to colour the points by superpixel.
+pub fn cloud_labels(labels: &Grid<u32>, depth: &Grid<f32>) -> Vec<u32> {
+    labels
+        .data()
+        .iter()
+        .zip(depth.data())
+        .filter(|&(_, &z)| has_point(z))
+        .map(|(&label, _)| label)
+        .collect()
+}
+
 /// Scene flow per pixel of frame 1 at the working resolution: X' − X with X = z x̄ (camera-1
 /// coordinates) and X' = R X + λ t̂ its position after the piece's motion (camera-2
 /// coordinates), as DESIGN.md stage 6 defines it (for a static point this is the camera motion's
@@ -49,10 +66,11 @@ pub fn scene_flow(
     k: &Intrinsics,
 ) -> Grid<[f32; 3]> {
     Grid::from_fn(labels.width(), labels.height(), |x, y| {
-        let z = *depth.get(x, y) as f64;
-        if !z.is_finite() || z <= 0.0 {
+        let z = *depth.get(x, y);
+        if !has_point(z) {
             return [f32::NAN; 3];
         }
+        let z = z as f64;
         let piece = &soup.pieces[*labels.get(x, y) as usize];
         let p = Vector3::from(k.ray(x as f64, y as f64)) * z;
         let d = piece.r * p + piece.t_hat * piece.lambda - p;
@@ -73,10 +91,11 @@ pub fn point_clouds(
     let (mut c1, mut c2) = (PointCloud::default(), PointCloud::default());
     for y in 0..labels.height() {
         for x in 0..labels.width() {
-            let z = *depth.get(x, y) as f64;
-            if !z.is_finite() || z <= 0.0 {
+            let z = *depth.get(x, y);
+            if !has_point(z) {
                 continue;
             }
+            let z = z as f64;
             let piece = &soup.pieces[*labels.get(x, y) as usize];
             let p = Vector3::from(k.ray(x as f64, y as f64)) * z;
             let p2 = piece.r * p + piece.t_hat * piece.lambda;
@@ -88,4 +107,55 @@ pub fn point_clouds(
         }
     }
     (c1, c2)
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::Matrix3;
+
+    use super::*;
+    use crate::soup::Piece;
+
+    /// A 6×2 soup: columns 0–1 a wall at depth 2 moving by (1, 0, 0), columns 2–3 a plane
+    /// behind the camera, columns 4–5 a static wall at depth 4.
+    fn soup_and_labels() -> (Soup, Grid<u32>) {
+        let piece = |m: [f64; 3], t: [f64; 3]| Piece {
+            r: Matrix3::identity(),
+            t_hat: Vector3::from(t),
+            m: Vector3::from(m),
+            lambda: 1.0,
+            hypothesis: 0,
+            degenerate: None,
+        };
+        let soup = Soup {
+            pieces: vec![
+                piece([0.0, 0.0, 0.5], [1.0, 0.0, 0.0]),
+                piece([0.0, 0.0, -1.0], [0.0, 0.0, 0.0]),
+                piece([0.0, 0.0, 0.25], [0.0, 0.0, 0.0]),
+            ],
+            hypotheses: Vec::new(),
+        };
+        (soup, Grid::from_fn(6, 2, |x, _| (x / 2) as u32))
+    }
+
+    #[test]
+    fn clouds_skip_pixels_without_depth_and_labels_follow_the_points() {
+        let (soup, labels) = soup_and_labels();
+        let k = Intrinsics::default_for(6, 2);
+        let depth = dense_depth(&soup, &labels, &k);
+        assert_eq!(*depth.get(0, 0), 2.0);
+        assert!(depth.get(2, 1).is_nan());
+        assert_eq!(*depth.get(5, 1), 4.0);
+        let frame = Grid::from_fn(6, 2, |x, y| [x as u8, y as u8, 0]);
+        let (c1, c2) = point_clouds(&soup, &labels, &depth, &frame, &k);
+        let point_labels = cloud_labels(&labels, &depth);
+        assert_eq!(point_labels, [0, 0, 2, 2, 0, 0, 2, 2]);
+        assert_eq!(c1.positions.len(), point_labels.len());
+        assert_eq!(c2.positions.len(), point_labels.len());
+        // Points in row-major order: the first is pixel (0, 0), the third pixel (4, 0).
+        assert_eq!(c1.colours[2], [4, 0, 0]);
+        assert_eq!(c1.positions[2][2], 4.0);
+        assert!((c2.positions[0][0] - c1.positions[0][0] - 1.0).abs() < 1e-6);
+        assert_eq!(c2.positions[2], c1.positions[2]);
+    }
 }

@@ -29,6 +29,15 @@ pub enum Stage {
 }
 
 impl Stage {
+    /// Every stage, in the order the pipeline runs them.
+    pub const ALL: [Stage; 5] = [
+        Stage::Flow,
+        Stage::Superpixels,
+        Stage::Motion,
+        Stage::Scales,
+        Stage::Outputs,
+    ];
+
     /// Name shown to users.
     pub fn name(self) -> &'static str {
         match self {

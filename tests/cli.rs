@@ -114,6 +114,7 @@ fn reconstruct_writes_the_documented_files() {
     );
     for name in [
         "depth.pfm",
+        "depth16.png",
         "depth.png",
         "frame1.ply",
         "frame2.ply",

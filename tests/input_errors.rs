@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use superpixel_soup::Error;
 use superpixel_soup::camera::IntrinsicsSource;
 use superpixel_soup::grid::Grid;
-use superpixel_soup::image::{Frame, decode_image, encode_png, read_image_file};
+use superpixel_soup::image::{Frame, decode_image, encode_png, read_exif_info, read_image_file};
 use superpixel_soup::input::prepare_pair;
 
 fn temp_path(name: &str) -> PathBuf {
@@ -138,6 +138,7 @@ fn unreadable_exif_loads_the_image_with_a_warning() {
     assert_eq!(loaded.exif.focal_35mm, None);
     let warning = loaded.exif.warning.clone().unwrap();
     assert!(warning.contains("EXIF"), "{warning}");
+    assert_eq!(read_exif_info(&broken), loaded.exif);
     let pair = prepare_pair(loaded.clone(), loaded, None, 1024).unwrap();
     assert_eq!(pair.camera.source, IntrinsicsSource::Default);
     assert!(pair.notes.iter().any(|n| n.contains("EXIF")));
@@ -150,6 +151,8 @@ fn exif_focal_length_and_orientation_are_applied() {
     let loaded = decode_image(&jpeg).unwrap();
     assert_eq!(loaded.frame.size(), (60, 80));
     assert_eq!(loaded.exif.focal_35mm, Some(26.0));
+    // The page decodes pixels with the browser and reads only the EXIF block: the same facts.
+    assert_eq!(read_exif_info(&jpeg), loaded.exif);
     let pair = prepare_pair(loaded.clone(), loaded, None, 1024).unwrap();
     assert_eq!(pair.camera.source, IntrinsicsSource::Exif);
     assert!((pair.camera.intrinsics.fx - 26.0 * 80.0 / 36.0).abs() < 1e-9);

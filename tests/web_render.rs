@@ -7,7 +7,7 @@
 //! u = 79.5 + f·x/z, v = 59.5 + f·y/z with f = 60 / tan 30°. Pictures are read back with
 //! `screenshot()` (PNG) and checked for properties with a tolerance, never compared exactly
 //! across backends.
-#![cfg(target_arch = "wasm32")]
+#![cfg(all(target_arch = "wasm32", feature = "viewer"))]
 
 use js_sys::{Reflect, Uint8Array};
 use superpixel_soup::image::{Frame, decode_image};
@@ -84,9 +84,9 @@ impl Cloud {
 
     fn show(&self, viewer: &Viewer) {
         ok(viewer.set_cloud(
-            &self.pos1,
+            self.pos1.clone(),
             self.pos2.clone(),
-            &self.rgb,
+            self.rgb.clone(),
             self.labels.clone(),
         ));
     }
@@ -419,7 +419,7 @@ async fn bad_options_and_buffers_give_readable_errors() {
 
     let viewer = open("webgl2").await;
     let err = viewer
-        .set_cloud(&[0.0, 0.0, 1.0], None, &[1, 2], None)
+        .set_cloud(vec![0.0, 0.0, 1.0], None, vec![1, 2], None)
         .unwrap_err();
     assert!(message(err).contains("colours hold 2 bytes for 1 points"));
     let err = viewer.set_colour_mode("superpixel").unwrap_err();

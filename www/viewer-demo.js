@@ -6,6 +6,8 @@
 // document.body.dataset.state is "loading", then "ready" or "error"; dataset.backend names the
 // backend in use. window.viewerDemo exposes the viewer and measureFrames() for tests.
 
+import { wireViewerControls } from './viewer-controls.js';
+
 const $ = (id) => document.getElementById(id);
 
 const params = new URLSearchParams(location.search);
@@ -170,7 +172,7 @@ async function main() {
     `${BACKEND_NAMES[viewer.backend]} · ${viewer.pointCount.toLocaleString('en')} points ` +
     `(${viewer.shownPointCount.toLocaleString('en')} drawn) · setCloud ${setCloudMs.toFixed(0)} ms`;
 
-  wireControls(viewer);
+  wireViewerControls(viewer);
   window.viewerDemo = { viewer, setCloudMs, measureFrames: (frames) => measureFrames(viewer, frames) };
   $('controls').hidden = false;
   setState('ready');
@@ -190,53 +192,6 @@ async function measureFrames(viewer, frames) {
   }
   await viewer.finish();
   return (performance.now() - start) / frames;
-}
-
-function wireControls(viewer) {
-  const morph = $('morph');
-  const setMorph = (t) => {
-    viewer.setMorph(t);
-    morph.value = String(t);
-    for (const radio of document.querySelectorAll('input[name="frame"]')) {
-      radio.checked = (radio.value === '1' && t === 0) || (radio.value === '2' && t === 1);
-    }
-  };
-
-  for (const radio of document.querySelectorAll('input[name="frame"]')) {
-    radio.addEventListener('change', () => setMorph(radio.value === '2' ? 1 : 0));
-  }
-  morph.addEventListener('input', () => setMorph(Number(morph.value)));
-
-  let playing = null;
-  $('play').addEventListener('click', () => {
-    if (playing !== null) {
-      cancelAnimationFrame(playing);
-      playing = null;
-      $('play').textContent = 'Play';
-      return;
-    }
-    $('play').textContent = 'Pause';
-    const start = performance.now() - Number(morph.value) * 1000;
-    const step = (now) => {
-      const phase = ((now - start) / 2000) % 1; // 0 → 1 → 0 every 2 s
-      setMorph(Math.round((1 - Math.abs(2 * phase - 1)) * 100) / 100);
-      playing = requestAnimationFrame(step);
-    };
-    playing = requestAnimationFrame(step);
-  });
-
-  $('point-size').addEventListener('input', () => viewer.setPointSize(Number($('point-size').value)));
-  $('colour-mode').addEventListener('change', () => viewer.setColourMode($('colour-mode').value));
-  $('reset').addEventListener('click', () => viewer.resetView());
-  $('screenshot').addEventListener('click', async () => {
-    const png = await viewer.screenshot();
-    const url = URL.createObjectURL(new Blob([png], { type: 'image/png' }));
-    const link = document.createElement('a');
-    link.href = url;
-    link.download = 'superpixel-soup-view.png';
-    link.click();
-    setTimeout(() => URL.revokeObjectURL(url), 1000);
-  });
 }
 
 main();

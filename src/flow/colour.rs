@@ -3,6 +3,7 @@
 //! vectors are black.
 
 use super::{FlowField, is_known};
+use crate::grid::Grid;
 use crate::image::Frame;
 
 /// Steps of each segment of the wheel: red–yellow, yellow–green, green–cyan, cyan–blue,
@@ -78,10 +79,21 @@ pub fn flow_picture(flow: &FlowField, max_radius: Option<f32>) -> Frame {
     })
 }
 
+/// [`flow_picture`] of `flow` at its own scale, with the vectors that are not `reliable` (e.g.
+/// failing the forward–backward check) drawn at a third of their brightness.
+pub fn flow_picture_with_reliability(flow: &FlowField, reliable: &Grid<bool>) -> Frame {
+    let mut picture = flow_picture(flow, None);
+    for (pixel, &trusted) in picture.data_mut().iter_mut().zip(reliable.data()) {
+        if !trusted {
+            *pixel = pixel.map(|c| c / 3);
+        }
+    }
+    picture
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grid::Grid;
 
     #[test]
     fn the_wheel_has_the_middlebury_hues() {
@@ -113,5 +125,14 @@ mod tests {
         assert_eq!(*pic.get(2, 0), [0, 0, 0]);
         let shared = flow_picture(&flow, Some(4.0));
         assert_eq!(*shared.get(0, 0), vector_colour(0.5, 0.0));
+    }
+
+    #[test]
+    fn unreliable_vectors_are_darker() {
+        let flow = Grid::from_vec(2, 1, vec![[1.0, 0.0], [1.0, 0.0]]).unwrap();
+        let reliable = Grid::from_vec(2, 1, vec![true, false]).unwrap();
+        let pic = flow_picture_with_reliability(&flow, &reliable);
+        assert_eq!(*pic.get(0, 0), vector_colour(1.0, 0.0));
+        assert_eq!(*pic.get(1, 0), vector_colour(1.0, 0.0).map(|c| c / 3));
     }
 }

@@ -8,7 +8,7 @@
 //! - [`decimate`]: deterministic decimation to a point budget
 //! - [`colour`]: colour modes (RGB, depth colour map, superpixel id)
 //! - [`view`]: the viewer's state and what the GPU draws from it (packed buffers, uniforms)
-//! - `gpu` (wasm only): wgpu on WebGPU or WebGL2, instanced screen-space quads
+//! - `gpu` (wasm only, feature `viewer`): wgpu on WebGPU or WebGL2, instanced screen-space quads
 //!   (`points.wgsl`), read-back for screenshots
 //!
 //! The JavaScript API is `crate::web::viewer` (wasm only).
@@ -18,6 +18,6 @@ pub mod cloud;
 pub mod colour;
 pub mod controls;
 pub mod decimate;
-#[cfg(target_arch = "wasm32")]
+#[cfg(all(target_arch = "wasm32", feature = "viewer"))]
 pub mod gpu;
 pub mod view;

@@ -125,14 +125,7 @@ impl View {
             self.colour_mode = ColourMode::Rgb;
         }
         self.select_points();
-        let both_frames: Vec<[f32; 3]> = self
-            .cloud
-            .pos1()
-            .iter()
-            .chain(self.cloud.pos2())
-            .copied()
-            .collect();
-        self.bounds = Bounds::of_points(&both_frames);
+        self.bounds = Bounds::of_points(self.cloud.pos1().iter().chain(self.cloud.pos2()));
         self.reset_view();
     }
 

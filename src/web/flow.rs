@@ -3,11 +3,9 @@
 
 use wasm_bindgen::prelude::*;
 
-use crate::error::{Error, Result};
 use crate::flow::colour::flow_picture;
 use crate::flow::{FlowPair, FlowParams, Preset};
-use crate::grid::Grid;
-use crate::image::Frame;
+use crate::image::frame_from_rgba;
 
 /// Flow both ways between two frames, as [`computeFlow`](compute_flow) returns it.
 #[wasm_bindgen]
@@ -60,11 +58,7 @@ impl FlowResult {
     /// (`4 · width · height`, opaque) ready for `new ImageData(...)`.
     #[wasm_bindgen(js_name = forwardPicture)]
     pub fn forward_picture(&self) -> Vec<u8> {
-        flow_picture(&self.pair.forward, None)
-            .data()
-            .iter()
-            .flat_map(|&[r, g, b]| [r, g, b, 255])
-            .collect()
+        super::rgba(&flow_picture(&self.pair.forward, None))
     }
 }
 
@@ -97,19 +91,6 @@ pub fn compute_flow(
         height,
         pair,
     })
-}
-
-/// An RGB frame from RGBA bytes (alpha ignored); fails unless there are `4 · w · h` of them.
-pub(super) fn frame_from_rgba(rgba: &[u8], w: usize, h: usize) -> Result<Frame> {
-    if rgba.len() != 4 * w * h {
-        return Err(Error::InvalidParameter(format!(
-            "an RGBA frame of {w}×{h} pixels has {} bytes, got {}",
-            4 * w * h,
-            rgba.len()
-        )));
-    }
-    let pixels = rgba.chunks_exact(4).map(|p| [p[0], p[1], p[2]]).collect();
-    Grid::from_vec(w, h, pixels)
 }
 
 /// A flow field as `u, v` pairs row by row.

@@ -3,10 +3,23 @@
 //! This layer stays thin: each export converts its arguments from JavaScript, calls the public
 //! Rust API that the CLI uses too, and converts the result (or a readable [`JsError`]) back.
 //! No algorithm lives here.
+//!
+//! - this file: `version`, `decodeImageInfo`
+//! - [`reconstruct`]: the pipeline for the page's Web Worker (`reconstruct`, `readExif`,
+//!   `resolveIntrinsics`, `pageDefaults`) and the result's pictures, clouds and export files
+//! - [`memory`]: out-of-memory reporting (`failedAllocation`, `memoryBytes`)
+//! - `flow`: `computeFlow`
+//! - [`viewer`] (feature `viewer`, on by default): the 3D point-cloud viewer. The worker's lean
+//!   module (scripts/build-web.sh) is built without it.
 
 use wasm_bindgen::prelude::*;
 
+use crate::image::Frame;
+
 mod flow;
+pub mod memory;
+pub mod reconstruct;
+#[cfg(feature = "viewer")]
 pub mod viewer;
 
 pub use flow::{FlowResult, compute_flow};
@@ -78,4 +91,13 @@ pub fn decode_image_info(bytes: &[u8]) -> Result<ImageInfo, JsError> {
         focal_35mm: image.exif.focal_35mm,
         exif_warning: image.exif.warning,
     })
+}
+
+/// A frame as opaque RGBA bytes, ready for `new ImageData(...)`.
+fn rgba(frame: &Frame) -> Vec<u8> {
+    frame
+        .data()
+        .iter()
+        .flat_map(|&[r, g, b]| [r, g, b, 255])
+        .collect()
 }

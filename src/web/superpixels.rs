@@ -4,8 +4,8 @@
 
 use wasm_bindgen::prelude::*;
 
-use super::flow::frame_from_rgba;
 use crate::image::Frame;
+use crate::image::frame_from_rgba;
 use crate::superpixels::view::{boundary_overlay, mean_colour};
 use crate::superpixels::{SlicParams, Superpixels, slic};
 

@@ -187,12 +187,15 @@ impl Viewer {
     #[wasm_bindgen(js_name = setCloud)]
     pub fn set_cloud(
         &self,
-        pos1: &[f32],
+        pos1: Vec<f32>,
         pos2: Option<Vec<f32>>,
-        rgb: &[u8],
+        rgb: Vec<u8>,
         labels: Option<Vec<u32>>,
     ) -> Result<(), JsError> {
-        let cloud = PointCloud::new(pos1, pos2.as_deref(), rgb, labels.as_deref())?;
+        let cloud = PointCloud::new(&pos1, pos2.as_deref(), &rgb, labels.as_deref())?;
+        // The cloud has its own copies: free the arguments before the view packs the points,
+        // so that large clouds do not hold three copies at once.
+        drop((pos1, pos2, rgb, labels));
         self.update(|view| {
             view.set_cloud(cloud);
             Ok(())

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use superpixel_soup::eval::flow_metrics;
-use superpixel_soup::flow::colour::flow_picture;
+use superpixel_soup::flow::colour::flow_picture_with_reliability;
 use superpixel_soup::flow::{FlowField, FlowParams, Preset, compute_flow};
 use superpixel_soup::formats::case::read_case;
 use superpixel_soup::formats::{flo, write_file};
@@ -62,12 +62,7 @@ pub fn run(args: Args) -> Result<()> {
         write_file(path, &flo::encode(&pair.backward))?;
     }
     if let Some(path) = &args.viz {
-        let mut picture = flow_picture(&pair.forward, None);
-        for (pixel, &reliable) in picture.data_mut().iter_mut().zip(pair.reliable.data()) {
-            if !reliable {
-                *pixel = pixel.map(|c| c / 3);
-            }
-        }
+        let picture = flow_picture_with_reliability(&pair.forward, &pair.reliable);
         write_file(path, &encode_png(&picture)?)?;
     }
     let (w, h) = pair.forward.size();

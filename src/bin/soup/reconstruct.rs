@@ -3,11 +3,11 @@
 use std::path::PathBuf;
 
 use superpixel_soup::camera::Intrinsics;
-use superpixel_soup::colormap::depth_picture;
-use superpixel_soup::flow::{FlowParams, Preset, resize_flow};
-use superpixel_soup::formats::ply::{Encoding, encode};
-use superpixel_soup::formats::{flo, pfm, png16, read_file, write_file};
-use superpixel_soup::image::{encode_png, read_image_file};
+use superpixel_soup::export::{self, ExportFile};
+use superpixel_soup::flow::{FlowParams, Preset};
+use superpixel_soup::formats::ply::Encoding;
+use superpixel_soup::formats::{flo, read_file, write_file};
+use superpixel_soup::image::read_image_file;
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
 use superpixel_soup::{Error, FlowInput, Params, Result, reconstruct};
 
@@ -77,25 +77,12 @@ pub fn run(args: Args) -> Result<()> {
     } else {
         Encoding::BinaryLittleEndian
     };
-    let (iw, ih) = pair.input_size;
-    write_file(&out("depth.pfm"), &pfm::encode(&rec.depth_input))?;
-    write_file(
-        &out("depth.png"),
-        &encode_png(&depth_picture(&rec.depth_input))?,
-    )?;
-    write_file(&out("frame1.ply"), &encode(&rec.cloud1, encoding)?)?;
-    write_file(&out("frame2.ply"), &encode(&rec.cloud2, encoding)?)?;
-    write_file(
-        &out("flow.flo"),
-        &flo::encode(&resize_flow(&rec.flow, iw, ih)),
-    )?;
-    write_file(
-        &out("labels.png"),
-        &png16::encode_labels(&rec.superpixels.labels)?,
-    )?;
-    let report = serde_json::to_string_pretty(&rec.report)
-        .map_err(|e| Error::InvalidParameter(e.to_string()))?;
-    write_file(&out("report.json"), report.as_bytes())?;
+    for file in ExportFile::ALL {
+        write_file(
+            &out(file.file_name()),
+            &export::encode(&rec, file, encoding)?,
+        )?;
+    }
     let total: f64 = rec.report.timings_ms.iter().map(|t| t.1).sum();
     println!(
         "{} superpixels, {} motion hypotheses, {} degenerate; intrinsics from {}; {:.0} ms; wrote {}",

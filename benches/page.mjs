@@ -1,0 +1,217 @@
+// The page end to end in headless Chromium: two photos picked through the file input until the
+// result is shown (decode, worker, pipeline in wasm, pictures, 3D view), with default
+// parameters, and the peak memory of the tab; plus how fast the page and its worker load.
+//
+//   node benches/page.mjs [--runs 3]
+//
+// Needs the release wasm in www/pkg (scripts/build-web.sh); builds the `soup` CLI (release) to
+// render the inputs with `soup synth`:
+// - 1024×436: the street scene as PNGs (the paper's Sintel size; nothing is downscaled);
+// - 4032×3024: the street rendered at 1008×756 and upscaled 4× in the browser to JPEGs
+//   (quality 0.92), like a phone's 12-megapixel photos; the page downscales them to the working
+//   size (long side 1024).
+// Each run uses a fresh browser. Times are the minimum over runs; memory is the largest peak
+// resident size (VmHWM) of the renderer process, the tab with its worker (the GPU process, which
+// rasterises with SwiftShader here, is apart), over runs.
+// Loading: a fresh browser (empty cache) opens the page on localhost and on an emulated
+// 10 Mbit/s line, with the worker on the lean module (the default) and on the full one
+// (`?worker=full`); "ready" is the page usable (the worker's module loaded), "viewer" the 3D view
+// created (the full module, loaded after the worker's); a cancel's worker restart is timed too.
+
+import { spawnSync } from 'node:child_process';
+import { mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { gzipSync } from 'node:zlib';
+import { tmpdir } from 'node:os';
+import path from 'node:path';
+import { parseArgs } from 'node:util';
+import { ROOT, launchBrowser, startServer } from '../tests/e2e/browser.mjs';
+
+const { values } = parseArgs({ options: { runs: { type: 'string', default: '3' } } });
+const runs = Number(values.runs);
+
+const work = mkdtempSync(path.join(tmpdir(), 'soup-page-bench-'));
+const soup = (...args) => {
+  const done = spawnSync('cargo', ['run', '--quiet', '--release', '--bin', 'soup', '--', ...args], {
+    cwd: ROOT,
+    stdio: ['ignore', 'ignore', 'inherit'],
+  });
+  if (done.status !== 0) {
+    throw new Error(`soup ${args.join(' ')} failed`);
+  }
+};
+soup('synth', path.join(work, 'small'), '--scene', 'street', '--size', '1024x436');
+soup('synth', path.join(work, 'photo'), '--scene', 'street', '--size', '1008x756');
+const png = (dir, name) => readFileSync(path.join(work, dir, 'street', name));
+
+const server = await startServer();
+
+/** Peak and current resident memory (MiB) of the browser's renderer processes. */
+async function rendererMemory(browser) {
+  const cdp = await browser.newBrowserCDPSession();
+  const { processInfo } = await cdp.send('SystemInfo.getProcessInfo');
+  await cdp.detach();
+  const kib = (pid, key) => {
+    const status = readFileSync(`/proc/${pid}/status`, 'utf8');
+    return Number(status.match(new RegExp(`^${key}:\\s+(\\d+) kB`, 'm'))[1]);
+  };
+  const renderers = processInfo.filter((p) => p.type === 'renderer');
+  return Math.max(...renderers.map((p) => kib(p.id, 'VmHWM'))) / 1024;
+}
+
+/** JPEGs of `pngs` scaled to `width × height` in the page (browser image scaling). */
+async function upscaleToJpeg(page, pngs, width, height) {
+  const out = [];
+  for (const buffer of pngs) {
+    const base64 = await page.evaluate(
+      async ({ data, width, height }) => {
+        const bytes = Uint8Array.from(atob(data), (c) => c.charCodeAt(0));
+        const bitmap = await createImageBitmap(new Blob([bytes], { type: 'image/png' }));
+        const canvas = new OffscreenCanvas(width, height);
+        const ctx = canvas.getContext('2d');
+        ctx.imageSmoothingQuality = 'high';
+        ctx.drawImage(bitmap, 0, 0, width, height);
+        const blob = await canvas.convertToBlob({ type: 'image/jpeg', quality: 0.92 });
+        const jpeg = new Uint8Array(await blob.arrayBuffer());
+        let text = '';
+        for (let i = 0; i < jpeg.length; i += 0x8000) {
+          text += String.fromCharCode(...jpeg.subarray(i, i + 0x8000));
+        }
+        return btoa(text);
+      },
+      { data: buffer.toString('base64'), width, height },
+    );
+    out.push(Buffer.from(base64, 'base64'));
+  }
+  return out;
+}
+
+/** One end-to-end run of `files` in a fresh browser: { ms, stages, memory, workingSize }. */
+async function endToEnd(files) {
+  const browser = await launchBrowser();
+  try {
+    const page = await browser.newPage({ viewport: { width: 1100, height: 900 } });
+    await page.goto(server.url);
+    await page.waitForFunction(() => document.body.dataset.state === 'idle', null, { timeout: 120_000 });
+    await page.evaluate(() => window.soupPage.viewerReady);
+    await page.setInputFiles('#file-input', files);
+    await page.waitForFunction(() => ['done', 'error'].includes(document.body.dataset.state), null, {
+      timeout: 600_000,
+    });
+    if ((await page.evaluate(() => document.body.dataset.state)) !== 'done') {
+      throw new Error(await page.textContent('[role="alert"]'));
+    }
+    const run = await page.evaluate(() => window.soupPage.lastRun);
+    const report = JSON.parse(await page.evaluate(async () => {
+      const { bytes } = await window.soupPage.pipeline.request('export', { name: 'report.json' });
+      return new TextDecoder().decode(bytes);
+    }));
+    return {
+      ms: run.endToEndMs,
+      stages: Object.values(run.stagesMs).reduce((a, b) => a + b, 0),
+      wasmMemory: run.memoryBytes / 2 ** 20,
+      memory: await rendererMemory(browser),
+      workingSize: report.working_size.join('×'),
+    };
+  } finally {
+    await browser.close();
+  }
+}
+
+/** A network for the loading rows: `null` is localhost as it is. */
+const NETWORKS = [
+  ['localhost', null],
+  ['10 Mbit/s, 40 ms RTT', { offline: false, latency: 40, downloadThroughput: 10e6 / 8, uploadThroughput: 5e6 / 8 }],
+];
+
+/**
+ * Page load in a fresh context (empty cache) on `network`, the worker with its `module` build:
+ * milliseconds to ready (usable: the worker's module loaded) and to the viewer; the worker's
+ * start, and its restart after a cancel (module cached).
+ */
+async function loading(module, network) {
+  const browser = await launchBrowser();
+  try {
+    const context = await browser.newContext();
+    const page = await context.newPage();
+    if (network !== null) {
+      const cdp = await context.newCDPSession(page);
+      await cdp.send('Network.enable');
+      await cdp.send('Network.emulateNetworkConditions', network);
+    }
+    await page.goto(`${server.url}?worker=${module}`);
+    await page.waitForFunction(() => document.body.dataset.state === 'idle', null, { timeout: 120_000 });
+    await page.evaluate(() => window.soupPage.viewerReady);
+    const marks = await page.evaluate(() => ({
+      ready: window.soupPage.readyMs,
+      viewer: window.soupPage.viewerReadyMs,
+      worker: window.soupPage.workerStartMs[0],
+    }));
+    marks.restart = await page.evaluate(async () => {
+      const started = performance.now();
+      window.soupPage.pipeline.restart();
+      await window.soupPage.pipeline.ready;
+      return performance.now() - started;
+    });
+    return marks;
+  } finally {
+    await browser.close();
+  }
+}
+
+const min = (xs) => Math.min(...xs);
+const max = (xs) => Math.max(...xs);
+const rows = [];
+try {
+  const cases = [
+    ['1024×436 PNG pair (street)', ['frame1.png', 'frame2.png'].map((name) => ({ name, mimeType: 'image/png', buffer: png('small', name) }))],
+  ];
+  {
+    const browser = await launchBrowser();
+    const page = await browser.newPage();
+    await page.goto(`${server.url}www/favicon.svg`);
+    const jpegs = await upscaleToJpeg(page, [png('photo', 'frame1.png'), png('photo', 'frame2.png')], 4032, 3024);
+    await browser.close();
+    cases.push([
+      `4032×3024 JPEG pair (street, upscaled; ${(jpegs[0].length / 2 ** 20).toFixed(1)} MB each)`,
+      jpegs.map((buffer, i) => ({ name: `photo${i + 1}.jpg`, mimeType: 'image/jpeg', buffer })),
+    ]);
+  }
+  for (const [name, files] of cases) {
+    const results = [];
+    for (let run = 0; run < runs; run++) {
+      results.push(await endToEnd(files));
+    }
+    rows.push(
+      `| ${name} | ${results[0].workingSize} | ${(min(results.map((r) => r.ms)) / 1000).toFixed(2)} s | ` +
+        `${(min(results.map((r) => r.stages)) / 1000).toFixed(2)} s | ` +
+        `${max(results.map((r) => r.memory)).toFixed(0)} MiB | ${max(results.map((r) => r.wasmMemory)).toFixed(0)} MiB |`,
+    );
+  }
+  const size = (name) => {
+    const file = path.join(ROOT, 'www/pkg', `${name}_bg.wasm`);
+    const gz = gzipSync(readFileSync(file), { level: 6 }).length;
+    return `${(statSync(file).size / 1024).toFixed(0)} KiB, ${(gz / 1024).toFixed(0)} KiB gzipped`;
+  };
+  const loadRows = [];
+  for (const [label, network] of NETWORKS) {
+    for (const [module, name] of [['lean', 'soup_worker'], ['full', 'superpixel_soup']]) {
+      const loads = [];
+      for (let run = 0; run < runs; run++) {
+        loads.push(await loading(module, network));
+      }
+      const ms = (key) => `${min(loads.map((l) => l[key])).toFixed(0)} ms`;
+      loadRows.push(`| ${label} | ${module} (${size(name)}) | ${ms('ready')} | ${ms('viewer')} | ${ms('worker')} | ${ms('restart')} |`);
+    }
+  }
+  console.log(`\nThe page end to end in headless Chromium, default parameters, minimum of ${runs} runs (fresh browser each)\n`);
+  console.log('| input | working size | end to end (pick → result shown) | pipeline stages in wasm | peak tab memory (renderer VmHWM) | worker wasm memory |');
+  console.log('| --- | --- | --- | --- | --- | --- |');
+  console.log(rows.join('\n'));
+  console.log(`\nFirst load (empty cache, gzip from scripts/serve.py), minimum of ${runs}\n`);
+  console.log('| network | worker module | page ready (worker loaded) | 3D viewer ready | worker start | worker restart (cancel) |');
+  console.log('| --- | --- | --- | --- | --- | --- |');
+  console.log(loadRows.join('\n'));
+} finally {
+  await server.close();
+  rmSync(work, { recursive: true, force: true });
+}

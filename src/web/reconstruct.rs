@@ -1,0 +1,426 @@
+//! The reconstruction for the page's Web Worker: [`crate::reconstruct`] (the API the CLI calls)
+//! on two RGBA frames the browser decoded, with the options of the page's form as JSON; the
+//! result stays in wasm memory and hands out typed arrays, pictures, the report and the export
+//! files on request.
+//!
+//! ```js
+//! const defaults = JSON.parse(pageDefaults());            // options, stages, presets, exports
+//! const exif = JSON.parse(readExif(fileBytes));           // { focal35mm?, warning? }
+//! const camera = JSON.parse(resolveIntrinsics(w, h, exif.focal35mm)); // shown in the form
+//! const options = { ...defaults.options, exif1: exif };
+//! const one = new FrameBuilder(w1, h1);                   // frame 1, filled strip by strip
+//! one.pushRows(ctx.getImageData(0, y, w1, rows).data);    // … until all rows are in
+//! const result = reconstruct(one, two, JSON.stringify(options),
+//!                            (stage, fraction) => { ... });   // throws an Error named below
+//! const cloud = result.cloud('organised');                // positions1/2, colours, labels
+//! const depth = result.picture('depth');                  // RGBA, result.width × result.height
+//! const ply = result.exportFile('frame1.ply');            // bytes of a download
+//! ```
+//!
+//! Thrown errors are `Error`s whose `name` says what went wrong (`SizeMismatchError`,
+//! `TooSmallError`, `NoParallaxError`, `InvalidParameterError`, `DecodeError`, `FormatError`)
+//! and whose message is the library's readable one.
+
+use js_sys::Function;
+use serde::{Deserialize, Serialize};
+use wasm_bindgen::prelude::*;
+
+use super::rgba;
+use crate::camera::{Intrinsics, resolve_intrinsics};
+use crate::colormap::{depth_legend, depth_picture, inverse_depth_range};
+use crate::error::Error;
+use crate::export::{self, ExportFile};
+use crate::flow::colour::flow_picture_with_reliability;
+use crate::flow::{FlowParams, Preset};
+use crate::formats::ply::Encoding;
+use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
+use crate::input::{DEFAULT_MAX_SIDE, MIN_SIDE, prepare_pair};
+use crate::output::{cloud_labels, dense_depth, point_clouds};
+use crate::pipeline::{FlowInput, Params, Reconstruction, Stage};
+use crate::superpixels::view::boundary_overlay;
+
+/// What the page asks for besides the pixels, as JSON with camelCase keys (`params` keeps the
+/// library's snake_case). Missing keys take the defaults of [`pageDefaults`](page_defaults).
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+pub struct RunOptions {
+    /// Every tunable of the pipeline.
+    pub params: Params,
+    /// Bound on the long side of the working resolution, in pixels.
+    pub max_side: usize,
+    /// Preset of the computed flow: `"fast"`, `"medium"` or `"high"`.
+    pub flow_preset: Preset,
+    /// The user's intrinsics in pixels of the input images; `null` takes frame 1's EXIF focal
+    /// length, else the default guess.
+    pub intrinsics: Option<Intrinsics>,
+    /// What frame 1's EXIF block said (from [`readExif`](read_exif)).
+    pub exif1: ExifInfo,
+    /// What frame 2's EXIF block said.
+    pub exif2: ExifInfo,
+    /// When the frames differ in size, resize frame 2 to frame 1's size instead of failing.
+    pub resize_second: bool,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            params: Params::default(),
+            max_side: DEFAULT_MAX_SIDE,
+            flow_preset: Preset::default(),
+            intrinsics: None,
+            exif1: ExifInfo::default(),
+            exif2: ExifInfo::default(),
+            resize_second: false,
+        }
+    }
+}
+
+/// What the page needs to know before a run.
+#[derive(Serialize)]
+#[serde(rename_all = "camelCase")]
+struct PageDefaults {
+    options: RunOptions,
+    /// Stage names in the order they run (the progress callback's first argument).
+    stages: Vec<&'static str>,
+    flow_presets: Vec<&'static str>,
+    /// File names [`PageReconstruction::export_file`] accepts.
+    exports: Vec<&'static str>,
+    /// The smallest side, in pixels, of images the pipeline accepts.
+    min_side: usize,
+}
+
+/// JSON: `{ options, stages, flowPresets, exports, minSide }`; `options` are the default
+/// [`RunOptions`].
+#[wasm_bindgen(js_name = pageDefaults)]
+pub fn page_defaults() -> Result<String, JsError> {
+    let defaults = PageDefaults {
+        options: RunOptions::default(),
+        stages: Stage::ALL.iter().map(|s| s.name()).collect(),
+        flow_presets: Preset::ALL.iter().map(|p| p.name()).collect(),
+        exports: ExportFile::ALL.iter().map(|f| f.file_name()).collect(),
+        min_side: MIN_SIDE,
+    };
+    Ok(serde_json::to_string(&defaults)?)
+}
+
+/// The EXIF facts of image file bytes without decoding the pixels, as JSON
+/// `{ "focal35mm": number | null, "warning": string | null }`. Never throws.
+#[wasm_bindgen(js_name = readExif)]
+pub fn read_exif(bytes: &[u8]) -> Result<String, JsError> {
+    Ok(serde_json::to_string(&read_exif_info(bytes))?)
+}
+
+/// The intrinsics a `width × height` photo gets without the user's (from its EXIF 35 mm focal
+/// length when given, else the default guess), as JSON
+/// `{ "intrinsics": { fx, fy, cx, cy }, "source": "exif" | "default" }`.
+#[wasm_bindgen(js_name = resolveIntrinsics)]
+pub fn resolve_intrinsics_json(
+    width: u32,
+    height: u32,
+    focal_35mm: Option<f64>,
+) -> Result<String, JsError> {
+    let camera = resolve_intrinsics(None, focal_35mm, width as usize, height as usize);
+    Ok(serde_json::to_string(&camera)?)
+}
+
+/// A frame filled from JavaScript with RGBA rows a strip at a time (e.g. from
+/// `getImageData` of a few rows), so that a large photo never sits in memory whole as RGBA.
+#[wasm_bindgen]
+pub struct FrameBuilder {
+    width: usize,
+    height: usize,
+    pixels: Vec<[u8; 3]>,
+}
+
+#[wasm_bindgen]
+impl FrameBuilder {
+    /// An empty `width × height` frame.
+    #[wasm_bindgen(constructor)]
+    pub fn new(width: u32, height: u32) -> FrameBuilder {
+        let (width, height) = (width as usize, height as usize);
+        FrameBuilder {
+            width,
+            height,
+            pixels: Vec::with_capacity(width.saturating_mul(height)),
+        }
+    }
+
+    /// Appends whole rows given as RGBA bytes, top to bottom (alpha is ignored). Throws when
+    /// the bytes are not whole rows or the frame would get too many rows.
+    #[wasm_bindgen(js_name = pushRows)]
+    pub fn push_rows(&mut self, rgba: &[u8]) -> Result<(), JsValue> {
+        let rows = rgba.len() / (4 * self.width).max(1);
+        let strip = frame_from_rgba(rgba, self.width, rows).map_err(js_error)?;
+        if self.rows() + rows > self.height {
+            return Err(js_error(Error::InvalidParameter(format!(
+                "a frame of {}×{} pixels got {} rows",
+                self.width,
+                self.height,
+                self.rows() + rows
+            ))));
+        }
+        self.pixels.extend_from_slice(strip.data());
+        Ok(())
+    }
+
+    /// Rows received so far.
+    fn rows(&self) -> usize {
+        self.pixels.len() / self.width.max(1)
+    }
+
+    /// The complete frame; fails when rows are missing.
+    fn finish(self) -> crate::Result<Frame> {
+        if self.rows() != self.height {
+            return Err(Error::InvalidParameter(format!(
+                "a frame of {}×{} pixels got only {} rows",
+                self.width,
+                self.height,
+                self.rows()
+            )));
+        }
+        crate::Grid::from_vec(self.width, self.height, self.pixels)
+    }
+}
+
+/// Reconstructs both frames: frame 1 (the reference) and frame 2 (consumed), `options` as
+/// JSON [`RunOptions`]. `progress(stage, fraction)`, when given, is called as stages start and
+/// finish (fraction in [0, 1] within the stage). Throws an `Error` named after the problem
+/// (module docs) with a readable message.
+#[wasm_bindgen]
+pub fn reconstruct(
+    frame1: FrameBuilder,
+    frame2: FrameBuilder,
+    options: &str,
+    progress: Option<Function>,
+) -> Result<PageReconstruction, JsValue> {
+    let options: RunOptions = serde_json::from_str(options)
+        .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))?;
+    let frame1 = frame1.finish().map_err(js_error)?;
+    let mut frame2 = frame2.finish().map_err(js_error)?;
+    if options.resize_second && frame2.size() != frame1.size() {
+        frame2 = resize(&frame2, frame1.width(), frame1.height());
+    }
+    let pair = prepare_pair(
+        LoadedImage {
+            frame: frame1,
+            exif: options.exif1,
+        },
+        LoadedImage {
+            frame: frame2,
+            exif: options.exif2,
+        },
+        options.intrinsics,
+        options.max_side,
+    )
+    .map_err(js_error)?;
+    let mut report = |stage: Stage, fraction: f32| {
+        if let Some(callback) = &progress {
+            // A throwing callback must not abort the reconstruction.
+            let _ = callback.call2(
+                &JsValue::NULL,
+                &JsValue::from_str(stage.name()),
+                &JsValue::from_f64(fraction.into()),
+            );
+        }
+    };
+    let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
+    let rec = crate::reconstruct(&pair, flow, &options.params, &mut report).map_err(js_error)?;
+    Ok(PageReconstruction {
+        frame1: pair.frame1,
+        rec,
+    })
+}
+
+/// A reconstruction kept in wasm memory; the worker takes what the page shows and downloads.
+#[wasm_bindgen]
+pub struct PageReconstruction {
+    /// The reference frame at the working resolution.
+    frame1: Frame,
+    rec: Reconstruction,
+}
+
+#[wasm_bindgen]
+impl PageReconstruction {
+    /// Width of the working resolution, in pixels (the pictures' width).
+    #[wasm_bindgen(getter)]
+    pub fn width(&self) -> u32 {
+        self.frame1.width() as u32
+    }
+
+    /// Height of the working resolution, in pixels.
+    #[wasm_bindgen(getter)]
+    pub fn height(&self) -> u32 {
+        self.frame1.height() as u32
+    }
+
+    /// The point clouds of both frames, one point per pixel with a depth: `"organised"` (the
+    /// solved relative scales, the result) or `"unorganised"` (every superpixel at unit scale
+    /// λ = 1, before the scale solve: the paper's Fig. 5).
+    pub fn cloud(&self, soup: &str) -> Result<CloudBuffers, JsError> {
+        let labels = &self.rec.superpixels.labels;
+        let k = &self.rec.report.camera.intrinsics;
+        let cloud = match soup {
+            "organised" => CloudBuffers::new(
+                &self.rec.cloud1,
+                &self.rec.cloud2,
+                cloud_labels(labels, &self.rec.depth),
+            ),
+            "unorganised" => {
+                let depth = dense_depth(&self.rec.unit_soup, labels, k);
+                let (c1, c2) = point_clouds(&self.rec.unit_soup, labels, &depth, &self.frame1, k);
+                CloudBuffers::new(&c1, &c2, cloud_labels(labels, &depth))
+            }
+            other => {
+                return Err(JsError::new(&format!(
+                    "unknown soup {other:?}; choose organised or unorganised"
+                )));
+            }
+        };
+        Ok(cloud)
+    }
+
+    /// A picture at the working resolution as RGBA bytes (`4 · width · height`, opaque), ready
+    /// for `new ImageData(...)`: `"depth"` (frame-1 depth, near warm, far cool, unknown black),
+    /// `"unorganised"` (the same for the soup at unit scales, before the scale solve),
+    /// `"superpixels"` (frame 1 with superpixel boundaries), `"flow"` (the flow used, Middlebury
+    /// colours, untrusted vectors darker).
+    pub fn picture(&self, name: &str) -> Result<Vec<u8>, JsError> {
+        let rec = &self.rec;
+        let frame = match name {
+            "depth" => depth_picture(&rec.depth),
+            "unorganised" => {
+                let k = &rec.report.camera.intrinsics;
+                depth_picture(&dense_depth(&rec.unit_soup, &rec.superpixels.labels, k))
+            }
+            "superpixels" => boundary_overlay(&self.frame1, &rec.superpixels, [255, 230, 0]),
+            "flow" => flow_picture_with_reliability(&rec.flow, &rec.reliable),
+            other => {
+                return Err(JsError::new(&format!(
+                    "unknown picture {other:?}; choose depth, unorganised, superpixels or flow"
+                )));
+            }
+        };
+        Ok(rgba(&frame))
+    }
+
+    /// The key of the `"depth"` picture as JSON `{ "colours": [[r, g, b], …], "depths": […] }`,
+    /// `steps` colours from near to far (depth in the reconstruction's unit: relative, the
+    /// global scale of a monocular reconstruction is unknown); `null` when no depth is known.
+    #[wasm_bindgen(js_name = depthLegend)]
+    pub fn depth_legend(&self, steps: u32) -> Result<String, JsError> {
+        let legend = inverse_depth_range(self.rec.depth.data().iter().copied())
+            .map(|range| depth_legend(range, steps as usize));
+        #[derive(Serialize)]
+        struct Legend<'a> {
+            colours: &'a [[u8; 3]],
+            depths: &'a [f32],
+        }
+        let json = legend.as_ref().map(|l| Legend {
+            colours: &l.colours,
+            depths: &l.depths,
+        });
+        Ok(serde_json::to_string(&json)?)
+    }
+
+    /// The report (intrinsics and their source, sizes, parameters, milliseconds per stage,
+    /// counts, energies) as JSON, as `report.json` of the CLI.
+    pub fn report(&self) -> Result<String, JsError> {
+        let bytes = export::report_json(&self.rec)?;
+        Ok(String::from_utf8(bytes)?)
+    }
+
+    /// The bytes of an output file by name (`frame1.ply`, `frame2.ply`, `depth16.png`,
+    /// `flow.flo`, `report.json`, `depth.pfm`, `depth.png`, `labels.png`), exactly as
+    /// `soup reconstruct --out` writes it (binary PLY).
+    #[wasm_bindgen(js_name = exportFile)]
+    pub fn export_file(&self, name: &str) -> Result<Vec<u8>, JsError> {
+        let file = ExportFile::from_file_name(name)?;
+        Ok(export::encode(
+            &self.rec,
+            file,
+            Encoding::BinaryLittleEndian,
+        )?)
+    }
+
+    /// The media type of an output file by name (for the download's `Blob`).
+    #[wasm_bindgen(js_name = exportMediaType)]
+    pub fn export_media_type(&self, name: &str) -> Result<String, JsError> {
+        Ok(ExportFile::from_file_name(name)?.media_type().to_string())
+    }
+}
+
+/// A point cloud in both frames as flat arrays for the viewer's `setCloud`.
+#[wasm_bindgen]
+pub struct CloudBuffers {
+    positions1: Vec<f32>,
+    positions2: Vec<f32>,
+    colours: Vec<u8>,
+    labels: Vec<u32>,
+}
+
+impl CloudBuffers {
+    fn new(
+        cloud1: &crate::formats::ply::PointCloud,
+        cloud2: &crate::formats::ply::PointCloud,
+        labels: Vec<u32>,
+    ) -> Self {
+        CloudBuffers {
+            positions1: cloud1.positions.iter().flatten().copied().collect(),
+            positions2: cloud2.positions.iter().flatten().copied().collect(),
+            colours: cloud1.colours.iter().flatten().copied().collect(),
+            labels,
+        }
+    }
+}
+
+#[wasm_bindgen]
+impl CloudBuffers {
+    /// Number of points.
+    #[wasm_bindgen(getter)]
+    pub fn count(&self) -> u32 {
+        self.labels.len() as u32
+    }
+
+    /// `Float32Array`, x, y, z per point in frame 1 (camera 1's frame: x right, y down,
+    /// z forward; relative units).
+    #[wasm_bindgen(getter)]
+    pub fn positions1(&self) -> js_sys::Float32Array {
+        js_sys::Float32Array::from(self.positions1.as_slice())
+    }
+
+    /// `Float32Array`, the same points in frame 2 (X' = R X + λ t̂), same frame of reference.
+    #[wasm_bindgen(getter)]
+    pub fn positions2(&self) -> js_sys::Float32Array {
+        js_sys::Float32Array::from(self.positions2.as_slice())
+    }
+
+    /// `Uint8Array`, r, g, b per point (frame 1's colours).
+    #[wasm_bindgen(getter)]
+    pub fn colours(&self) -> js_sys::Uint8Array {
+        js_sys::Uint8Array::from(self.colours.as_slice())
+    }
+
+    /// `Uint32Array`, the superpixel of each point.
+    #[wasm_bindgen(getter)]
+    pub fn labels(&self) -> js_sys::Uint32Array {
+        js_sys::Uint32Array::from(self.labels.as_slice())
+    }
+}
+
+/// A JavaScript `Error` carrying the library's message, named after the kind of problem so the
+/// page can react (e.g. offer to resize frame 2 on `SizeMismatchError`).
+fn js_error(error: Error) -> JsValue {
+    let name = match &error {
+        Error::Io { .. } => "IoError",
+        Error::Decode(_) => "DecodeError",
+        Error::TooSmall { .. } => "TooSmallError",
+        Error::SizeMismatch { .. } => "SizeMismatchError",
+        Error::Format { .. } => "FormatError",
+        Error::NoParallax(_) => "NoParallaxError",
+        Error::InvalidParameter(_) => "InvalidParameterError",
+        Error::Graphics(_) => "GraphicsError",
+    };
+    let js = js_sys::Error::new(&error.to_string());
+    js.set_name(name);
+    js.into()
+}

@@ -1,0 +1,235 @@
+//! Browser tests of the reconstruction API of the page's worker (`src/web/reconstruct.rs`,
+//! `src/web/memory.rs`), run headless in Chromium by ./check.sh through wasm-bindgen-test-runner.
+//! They call the exports as the worker does: RGBA frames, options as JSON, errors as named
+//! JavaScript `Error`s.
+#![cfg(target_arch = "wasm32")]
+
+use js_sys::Function;
+use superpixel_soup::formats::ply;
+use superpixel_soup::image::{Frame, encode_png};
+use superpixel_soup::synth::{SceneKind, render};
+use superpixel_soup::web::memory::failed_allocation;
+use superpixel_soup::web::reconstruct::{
+    FrameBuilder, PageReconstruction, page_defaults, read_exif, reconstruct,
+    resolve_intrinsics_json,
+};
+use wasm_bindgen::{JsCast, JsValue};
+use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
+
+wasm_bindgen_test_configure!(run_in_browser);
+
+/// A FrameBuilder filled with `frame`, in strips of up to 7 rows (as the worker fills it).
+fn builder(frame: &Frame) -> FrameBuilder {
+    let mut builder = FrameBuilder::new(frame.width() as u32, frame.height() as u32);
+    let rows: Vec<u8> = frame
+        .data()
+        .iter()
+        .flat_map(|&[r, g, b]| [r, g, b, 255])
+        .collect();
+    for strip in rows.chunks(7 * 4 * frame.width()) {
+        builder.push_rows(strip).unwrap();
+    }
+    builder
+}
+
+/// The options the page sends: the defaults with a few superpixels (a small, quick run).
+fn options(changes: &str) -> String {
+    let defaults: serde_json::Value = serde_json::from_str(&page_defaults().unwrap()).unwrap();
+    let mut options = defaults["options"].clone();
+    options["params"]["superpixels"]["count"] = 150.into();
+    let changes: serde_json::Value = serde_json::from_str(changes).unwrap();
+    for (key, value) in changes.as_object().unwrap() {
+        options[key] = value.clone();
+    }
+    options.to_string()
+}
+
+fn run(one: &Frame, two: &Frame, options: &str) -> Result<PageReconstruction, JsValue> {
+    reconstruct(builder(one), builder(two), options, None)
+}
+
+/// The `name` and `message` of a thrown error.
+fn name_and_message(error: JsValue) -> (String, String) {
+    let error = js_sys::Error::from(error);
+    (error.name().into(), error.message().into())
+}
+
+#[wasm_bindgen_test]
+fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
+    let scene = render(SceneKind::Street, 192, 82).unwrap();
+    let stages = std::rc::Rc::new(std::cell::RefCell::new(Vec::<String>::new()));
+    let seen = stages.clone();
+    let progress = wasm_bindgen::closure::Closure::<dyn FnMut(String, f64)>::new(
+        move |stage: String, fraction: f64| {
+            assert!((0.0..=1.0).contains(&fraction));
+            let mut seen = seen.borrow_mut();
+            if seen.last() != Some(&stage) {
+                seen.push(stage);
+            }
+        },
+    );
+    let result = reconstruct(
+        builder(&scene.frame1),
+        builder(&scene.frame2),
+        &options(r#"{"maxSide": 128}"#),
+        Some(progress.as_ref().unchecked_ref::<Function>().clone()),
+    )
+    .unwrap();
+    assert_eq!(
+        *stages.borrow(),
+        ["flow", "superpixels", "motion", "scales", "outputs"]
+    );
+    // Working size 128 × 55 (downscaled from 192 × 82).
+    let (w, h) = (result.width() as usize, result.height() as usize);
+    assert_eq!((w, h), (128, 55));
+    for name in ["depth", "unorganised", "superpixels", "flow"] {
+        assert_eq!(result.picture(name).unwrap().len(), 4 * w * h, "{name}");
+    }
+    assert!(result.picture("albedo").is_err());
+
+    let cloud = result.cloud("organised").unwrap();
+    let count = cloud.count() as usize;
+    assert!(count > w * h / 2, "{count} points");
+    assert_eq!(cloud.positions1().length() as usize, 3 * count);
+    assert_eq!(cloud.positions2().length() as usize, 3 * count);
+    assert_eq!(cloud.colours().length() as usize, 3 * count);
+    assert_eq!(cloud.labels().length() as usize, count);
+    let unorganised = result.cloud("unorganised").unwrap();
+    assert_eq!(unorganised.labels().length(), unorganised.count());
+    assert!(result.cloud("stew").is_err());
+
+    let ply = ply::decode(&result.export_file("frame1.ply").unwrap()).unwrap();
+    assert_eq!(ply.positions.len(), count);
+    assert_eq!(
+        result.export_media_type("depth16.png").unwrap(),
+        "image/png"
+    );
+    assert!(result.export_file("depth.exr").is_err());
+
+    let report: serde_json::Value = serde_json::from_str(&result.report().unwrap()).unwrap();
+    assert_eq!(report["input_size"], serde_json::json!([192, 82]));
+    assert_eq!(report["camera"]["source"], "default");
+    assert_eq!(report["params"]["superpixels"]["count"], 150);
+    let legend: serde_json::Value = serde_json::from_str(&result.depth_legend(8).unwrap()).unwrap();
+    assert_eq!(legend["colours"].as_array().unwrap().len(), 8);
+    assert_eq!(legend["depths"].as_array().unwrap().len(), 8);
+}
+
+#[wasm_bindgen_test]
+fn bad_input_throws_named_errors_with_the_library_messages() {
+    let scene = render(SceneKind::StaticRoom, 64, 48).unwrap();
+    let small = render(SceneKind::StaticRoom, 48, 36).unwrap();
+
+    let (name, message) = name_and_message(
+        run(&scene.frame1, &small.frame2, &options("{}"))
+            .err()
+            .unwrap(),
+    );
+    assert_eq!(name, "SizeMismatchError");
+    assert!(
+        message.contains("64×48") && message.contains("48×36"),
+        "{message}"
+    );
+    // Resizing frame 2 instead gets past the size check.
+    let resized = run(
+        &scene.frame1,
+        &small.frame2,
+        &options(r#"{"resizeSecond": true}"#),
+    );
+    if let Err(error) = resized {
+        assert_ne!(name_and_message(error).0, "SizeMismatchError");
+    }
+
+    let tiny = render(SceneKind::StaticRoom, 16, 16).unwrap();
+    let (name, _) = name_and_message(
+        run(&tiny.frame1, &tiny.frame2, &options("{}"))
+            .err()
+            .unwrap(),
+    );
+    assert_eq!(name, "TooSmallError");
+
+    let (name, message) = name_and_message(
+        run(&scene.frame1, &scene.frame1, &options("{}"))
+            .err()
+            .unwrap(),
+    );
+    assert_eq!(name, "NoParallaxError");
+    assert!(message.starts_with("no parallax"), "{message}");
+
+    let (name, message) = name_and_message(
+        run(&scene.frame1, &scene.frame2, r#"{"maxSide": "big"}"#)
+            .err()
+            .unwrap(),
+    );
+    assert_eq!(name, "InvalidParameterError");
+    assert!(
+        message.starts_with("invalid parameter: options:"),
+        "{message}"
+    );
+
+    // Frames filled wrongly: ragged rows, too many rows, missing rows.
+    let mut ragged = FrameBuilder::new(64, 48);
+    let (name, message) = name_and_message(ragged.push_rows(&[0; 4 * 64 + 4]).unwrap_err());
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("has 256 bytes, got 260"), "{message}");
+    let mut full = builder(&scene.frame1);
+    let (_, message) = name_and_message(full.push_rows(&[0; 4 * 64]).unwrap_err());
+    assert!(message.contains("got 49 rows"), "{message}");
+    let mut partial = FrameBuilder::new(64, 48);
+    partial.push_rows(&[0; 4 * 64 * 47]).unwrap();
+    let (name, message) = name_and_message(
+        reconstruct(partial, builder(&scene.frame2), &options("{}"), None)
+            .err()
+            .unwrap(),
+    );
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("got only 47 rows"), "{message}");
+}
+
+#[wasm_bindgen_test]
+fn exif_intrinsics_and_defaults_as_json() {
+    let png = encode_png(&render(SceneKind::Flag, 32, 32).unwrap().frame1).unwrap();
+    assert_eq!(
+        read_exif(&png).unwrap(),
+        r#"{"focal35mm":null,"warning":null}"#
+    );
+    let camera: serde_json::Value =
+        serde_json::from_str(&resolve_intrinsics_json(640, 480, Some(36.0)).unwrap()).unwrap();
+    assert_eq!(camera["source"], "exif");
+    assert_eq!(camera["intrinsics"]["fx"], 640.0);
+    let camera: serde_json::Value =
+        serde_json::from_str(&resolve_intrinsics_json(640, 480, None).unwrap()).unwrap();
+    assert_eq!(camera["source"], "default");
+    assert_eq!(camera["intrinsics"]["cx"], 319.5);
+
+    let defaults: serde_json::Value = serde_json::from_str(&page_defaults().unwrap()).unwrap();
+    assert_eq!(defaults["options"]["maxSide"], 1024);
+    assert_eq!(defaults["options"]["flowPreset"], "medium");
+    assert_eq!(defaults["options"]["params"]["k"], 15);
+    assert_eq!(defaults["stages"].as_array().unwrap().len(), 5);
+    assert_eq!(
+        defaults["flowPresets"],
+        serde_json::json!(["fast", "medium", "high"])
+    );
+    assert!(
+        defaults["exports"]
+            .as_array()
+            .unwrap()
+            .contains(&"flow.flo".into())
+    );
+}
+
+#[wasm_bindgen_test]
+fn a_failed_allocation_is_remembered() {
+    // Three allocations of 1.5 GB cannot all fit in the 4 GiB of wasm32 memory (growing only
+    // reserves address space, so this costs no real memory).
+    const SIZE: usize = 1_500_000_000;
+    let mut blocks = [Vec::<u8>::new(), Vec::new(), Vec::new()];
+    let failed = blocks
+        .iter_mut()
+        .map(|block| block.try_reserve_exact(SIZE))
+        .filter(Result::is_err)
+        .count();
+    assert!(failed > 0);
+    assert_eq!(failed_allocation(), Some(SIZE as f64));
+}
