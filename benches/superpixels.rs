@@ -41,12 +41,7 @@ fn main() {
         let recall = boundary_recall(&sp.labels, &scene.depth1, 0.05, 2)
             .ok()
             .flatten();
-        let smallest = sp
-            .segments
-            .iter()
-            .map(|s| s.pixels.len())
-            .min()
-            .unwrap_or(0);
+        let smallest = sp.smallest_size();
         quality.push((kind.name().to_string(), sp.len(), smallest, recall));
     }
     if let Some(dir) = eval_case_dir("middlebury-motorcycle")
@@ -59,12 +54,7 @@ fn main() {
             .depth1
             .as_ref()
             .and_then(|d| boundary_recall(&sp.labels, d, 0.05, 2).ok().flatten());
-        let smallest = sp
-            .segments
-            .iter()
-            .map(|s| s.pixels.len())
-            .min()
-            .unwrap_or(0);
+        let smallest = sp.smallest_size();
         quality.push(("middlebury-motorcycle".into(), sp.len(), smallest, recall));
     }
     println!("\nSLIC N=1500, compactness 10\n");

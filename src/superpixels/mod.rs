@@ -47,6 +47,15 @@ impl Superpixels {
         self.segments.is_empty()
     }
 
+    /// Size in pixels of the smallest superpixel (0 when there are none).
+    pub fn smallest_size(&self) -> usize {
+        self.segments
+            .iter()
+            .map(|s| s.pixels.len())
+            .min()
+            .unwrap_or(0)
+    }
+
     /// Anchors normalised by the image's long side, as the paper's weights expect.
     pub fn normalised_anchors(&self) -> Vec<[f64; 2]> {
         let long = self.labels.width().max(self.labels.height()) as f64;

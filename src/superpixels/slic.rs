@@ -671,45 +671,26 @@ mod tests {
     #[test]
     fn bad_parameters_are_errors() {
         let frame = Grid::filled(32, 32, [0u8; 3]);
-        assert!(
-            slic(
-                &frame,
-                &SlicParams {
-                    count: 0,
-                    ..SlicParams::default()
-                }
-            )
-            .is_err()
-        );
-        assert!(
-            slic(
-                &frame,
-                &SlicParams {
-                    count: 1000,
-                    ..SlicParams::default()
-                }
-            )
-            .is_err()
-        );
-        assert!(
-            slic(
-                &frame,
-                &SlicParams {
-                    count: usize::MAX,
-                    ..SlicParams::default()
-                }
-            )
-            .is_err()
-        );
-        assert!(
-            slic(
-                &frame,
-                &SlicParams {
-                    compactness: -1.0,
-                    ..SlicParams::default()
-                }
-            )
-            .is_err()
-        );
+        let bad = [
+            SlicParams {
+                count: 0,
+                ..SlicParams::default()
+            },
+            SlicParams {
+                count: 1000,
+                ..SlicParams::default()
+            },
+            SlicParams {
+                count: usize::MAX,
+                ..SlicParams::default()
+            },
+            SlicParams {
+                compactness: -1.0,
+                ..SlicParams::default()
+            },
+        ];
+        for params in bad {
+            assert!(slic(&frame, &params).is_err(), "{params:?}");
+        }
     }
 }

@@ -1,27 +1,16 @@
 // End-to-end test of the page's bad inputs: each gives a readable message in the alert
 // (role="alert"), the state "error", and the page stays usable: a good run works afterwards.
 
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { launchBrowser, startServer } from './browser.mjs';
+import { browserSession } from './browser.mjs';
 import { makePng } from './png.mjs';
 import { SAMPLE, alertText, convertImage, openPage, waitForRunEnd } from './page-helpers.mjs';
 
-let server;
-let browser;
-
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const session = browserSession();
 
 test('bad inputs give readable messages and the page stays usable', async () => {
-  const { page, errors } = await openPage(browser, server.url);
+  const { page, errors } = await openPage(session.browser, session.server.url);
   const [one, two] = SAMPLE;
 
   /** Picks `files`, waits for the error and returns the alert's text. */
@@ -83,7 +72,7 @@ test('bad inputs give readable messages and the page stays usable', async () => 
 });
 
 test('out of memory is told apart from a crash, and the next run works', async () => {
-  const { page, errors } = await openPage(browser, server.url);
+  const { page, errors } = await openPage(session.browser, session.server.url);
   // The fresh worker's wasm memory is grown to 8 MB below the browser's limit for wasm32 (4 GiB)
   // first, so the reconstruction runs out of memory part way, as on a device without memory to
   // spare (growing reserves address space; it does not use the memory).

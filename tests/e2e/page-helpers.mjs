@@ -4,7 +4,7 @@
 
 import { readFileSync } from 'node:fs';
 import path from 'node:path';
-import { ROOT } from './browser.mjs';
+import { ROOT, analysePicture, difference } from './browser.mjs';
 
 /** The built-in sample pair (www/sample/) as files for `setInputFiles`. */
 export const SAMPLE = ['frame1.png', 'frame2.png'].map((name) => ({
@@ -50,39 +50,12 @@ export function alertText(page) {
   });
 }
 
-/**
- * Share of the 3D view's pixels that differ from its background (#1d2330), and an 8 × 8 block
- * signature of the picture, from the viewer's own screenshot decoded in the page.
- */
+/** Share of the 3D view's drawn pixels and block signature (analysePicture) of its screenshot. */
 export function analyseView(page) {
-  return page.evaluate(async () => {
-    const viewer = await window.soupPage.viewerReady;
-    const bytes = await viewer.screenshot();
-    const bitmap = await createImageBitmap(new Blob([bytes], { type: 'image/png' }));
-    const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
-    const ctx = canvas.getContext('2d');
-    ctx.drawImage(bitmap, 0, 0);
-    const { data, width, height } = ctx.getImageData(0, 0, bitmap.width, bitmap.height);
-    let drawn = 0;
-    const blocks = new Array(64).fill(0);
-    for (let y = 0; y < height; y++) {
-      for (let x = 0; x < width; x++) {
-        const i = 4 * (y * width + x);
-        const [r, g, b] = [data[i], data[i + 1], data[i + 2]];
-        if (Math.abs(r - 0x1d) + Math.abs(g - 0x23) + Math.abs(b - 0x30) > 12) {
-          drawn += 1;
-        }
-        blocks[Math.floor((8 * y) / height) * 8 + Math.floor((8 * x) / width)] += r + g + b;
-      }
-    }
-    return { width, height, drawn: drawn / (width * height), blocks };
-  });
+  return analysePicture(page, 'page');
 }
 
-/** Largest relative difference between two block signatures of analyseView. */
-export function difference(a, b) {
-  return Math.max(...a.blocks.map((v, i) => Math.abs(v - b.blocks[i]) / Math.max(1, v, b.blocks[i])));
-}
+export { difference };
 
 /** Clicks the download button of `file` and resolves to the downloaded bytes (a Buffer). */
 export async function download(page, file) {

@@ -3,11 +3,11 @@
 // sample button on a phone-sized touch screen (WebGL2), cancel, a video, EXIF intrinsics and
 // the parameters panel. Bad inputs are in page-errors.test.mjs.
 
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { readFileSync } from 'node:fs';
 import path from 'node:path';
-import { ROOT, launchBrowser, startServer } from './browser.mjs';
+import { ROOT, browserSession } from './browser.mjs';
 import {
   SAMPLE,
   SAMPLE_SIZE,
@@ -29,21 +29,10 @@ const cargoVersion = readFileSync(path.join(ROOT, 'Cargo.toml'), 'utf8').match(
   /^version\s*=\s*"([^"]+)"/m,
 )[1];
 
-let server;
-let browser;
-
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const session = browserSession();
 
 test('the sample through the file input, drawn with WebGPU, with every download', async () => {
-  const { page, errors } = await openPage(browser, server.url, '?backend=webgpu');
+  const { page, errors } = await openPage(session.browser, session.server.url, '?backend=webgpu');
   assert.equal(await page.title(), 'Superpixel Soup');
   assert.equal(await page.textContent('#version'), cargoVersion);
   assert.equal(await page.evaluate(() => globalThis.crossOriginIsolated), true);
@@ -130,7 +119,7 @@ test('the sample through the file input, drawn with WebGPU, with every download'
 });
 
 test('the sample button on a phone-sized touch screen, drawn with WebGL2', async () => {
-  const { page, errors } = await openPage(browser, server.url, '?backend=webgl2', {
+  const { page, errors } = await openPage(session.browser, session.server.url, '?backend=webgl2', {
     viewport: { width: 390, height: 844 },
     deviceScaleFactor: 2,
     isMobile: true,
@@ -170,7 +159,7 @@ test('the sample button on a phone-sized touch screen, drawn with WebGL2', async
 });
 
 test('cancel stops a run at once and the next run works', async () => {
-  const { page, errors } = await openPage(browser, server.url);
+  const { page, errors } = await openPage(session.browser, session.server.url);
   await page.click('#sample-button');
   // The main thread shows the worker's progress while it computes: the page is responsive.
   await page.waitForFunction(() => document.querySelector('#stages li.active')?.dataset.stage === 'motion', null, { timeout: 60_000 });
@@ -189,7 +178,7 @@ test('cancel stops a run at once and the next run works', async () => {
 });
 
 test('two frames picked from a video', async () => {
-  const { page, errors } = await openPage(browser, server.url);
+  const { page, errors } = await openPage(session.browser, session.server.url);
   // A WebM recorded in the page: the sample's frame 1 until the recorder has delivered data,
   // then its frame 2 for a second.
   const video = await page.evaluate(async () => {
@@ -257,7 +246,7 @@ test('two frames picked from a video', async () => {
 });
 
 test('EXIF focal length fills the intrinsics; parameters reach the pipeline', async () => {
-  const { page, errors } = await openPage(browser, server.url);
+  const { page, errors } = await openPage(session.browser, session.server.url);
   const [one, two] = await Promise.all(SAMPLE.map((f) => convertImage(page, f.buffer, { type: 'image/jpeg', quality: 0.95 })));
   // A smaller working size and fewer superpixels, through the form.
   await page.click('#params-details summary');

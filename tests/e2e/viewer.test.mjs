@@ -2,75 +2,26 @@
 // which, draws the synthetic scene on the canvas, reacts to its controls, downloads a PNG
 // screenshot, and shows a readable message when no backend works.
 
-import { test, before, after } from 'node:test';
+import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { launchBrowser, startServer } from './browser.mjs';
+import { analysePicture, browserSession, difference } from './browser.mjs';
 
-let server;
-let browser;
-
-before(async () => {
-  server = await startServer();
-  browser = await launchBrowser();
-});
-
-after(async () => {
-  await browser?.close();
-  await server?.close();
-});
+const session = browserSession();
 
 /** Opens viewer.html with `query` and waits until it is ready or failed. */
 async function open(query, { init, deviceScaleFactor = 1 } = {}) {
-  const page = await browser.newPage({ viewport: { width: 900, height: 800 }, deviceScaleFactor });
+  const page = await session.browser.newPage({ viewport: { width: 900, height: 800 }, deviceScaleFactor });
   const errors = [];
   page.on('pageerror', (err) => errors.push(err.message));
   page.on('console', (msg) => msg.type() === 'error' && errors.push(msg.text()));
   if (init) {
     await page.addInitScript(init);
   }
-  await page.goto(`${server.url}viewer.html${query}`);
+  await page.goto(`${session.server.url}viewer.html${query}`);
   await page.waitForFunction(() => document.body.dataset.state !== 'loading', null, {
     timeout: 60_000,
   });
   return { page, errors };
-}
-
-/**
- * Share of pixels of a PNG that differ from the viewer's background (#1d2330), decoded by the
- * browser, and a coarse signature (summed colour per block of an 8 × 8 grid) to tell pictures
- * apart. The PNG is `png` (a Node Buffer), or with `png` null the viewer's own screenshot, taken
- * and analysed in the page (moving its bytes through Playwright would take seconds).
- */
-async function analyse(page, png = null) {
-  return page.evaluate(async (base64) => {
-    const bytes =
-      base64 === null
-        ? await window.viewerDemo.viewer.screenshot()
-        : Uint8Array.from(atob(base64), (c) => c.charCodeAt(0));
-    const bitmap = await createImageBitmap(new Blob([bytes], { type: 'image/png' }));
-    const canvas = new OffscreenCanvas(bitmap.width, bitmap.height);
-    const ctx = canvas.getContext('2d');
-    ctx.drawImage(bitmap, 0, 0);
-    const { data, width, height } = ctx.getImageData(0, 0, bitmap.width, bitmap.height);
-    let drawn = 0;
-    const blocks = new Array(64).fill(0);
-    for (let y = 0; y < height; y++) {
-      for (let x = 0; x < width; x++) {
-        const i = 4 * (y * width + x);
-        const [r, g, b] = [data[i], data[i + 1], data[i + 2]];
-        if (Math.abs(r - 0x1d) + Math.abs(g - 0x23) + Math.abs(b - 0x30) > 12) {
-          drawn += 1;
-        }
-        blocks[Math.floor((8 * y) / height) * 8 + Math.floor((8 * x) / width)] += r + g + b;
-      }
-    }
-    return { width, height, drawn: drawn / (width * height), blocks };
-  }, png === null ? null : png.toString('base64'));
-}
-
-/** Largest relative difference between two block signatures. */
-function difference(a, b) {
-  return Math.max(...a.blocks.map((v, i) => Math.abs(v - b.blocks[i]) / Math.max(1, v, b.blocks[i])));
 }
 
 // 30 000 points keep the software-rendered frames quick; the benchmark draws 500 000.
@@ -87,21 +38,21 @@ for (const [query, backend, label] of [
       assert.equal(await page.isHidden('[role="alert"]'), true);
 
       // What the page shows on screen (the composited canvas), not only the off-screen copy.
-      const onScreen = await analyse(page, await page.locator('#view').screenshot());
+      const onScreen = await analysePicture(page, (await page.locator('#view').screenshot()).toString('base64'));
       assert.ok(onScreen.drawn > 0.1, `canvas on screen mostly background (${onScreen.drawn})`);
 
-      const frame1 = await analyse(page);
+      const frame1 = await analysePicture(page, 'viewer');
       const box = await page.locator('#view').boundingBox();
       assert.equal(frame1.width, Math.round(box.width), 'drawing buffer = CSS size × DPR (1)');
       assert.ok(frame1.drawn > 0.1, `screenshot mostly background (${frame1.drawn})`);
 
       await page.check('input[name="frame"][value="2"]');
-      const frame2 = await analyse(page);
+      const frame2 = await analysePicture(page, 'viewer');
       assert.ok(difference(frame1, frame2) > 0.1, 'frame 2 looks like frame 1');
       assert.equal(await page.evaluate(() => window.viewerDemo.viewer.morph), 1);
 
       await page.selectOption('#colour-mode', 'depth');
-      const depth = await analyse(page);
+      const depth = await analysePicture(page, 'viewer');
       assert.ok(difference(frame2, depth) > 0.1, 'depth colours look like photo colours');
 
       // A drag orbits the camera; reset brings the same picture back.
@@ -109,10 +60,10 @@ for (const [query, backend, label] of [
       await page.mouse.down();
       await page.mouse.move(box.x + box.width / 2 + 150, box.y + box.height / 2 + 40, { steps: 5 });
       await page.mouse.up();
-      const orbited = await analyse(page);
+      const orbited = await analysePicture(page, 'viewer');
       assert.ok(difference(depth, orbited) > 0.1, 'dragging did not move the view');
       await page.click('#reset');
-      const reset = await analyse(page);
+      const reset = await analysePicture(page, 'viewer');
       assert.ok(difference(depth, reset) < 0.02, 'reset did not return to the home view');
 
       const [download] = await Promise.all([page.waitForEvent('download'), page.click('#screenshot')]);
@@ -144,7 +95,7 @@ test('the drawing buffer follows the canvas size and the device pixel ratio', as
     s = await size();
     assert.deepEqual([s.width, s.height], [2 * s.css[0], 2 * s.css[1]]);
     assert.ok(s.css[0] < 500, `canvas ${s.css[0]} CSS px wide in a 500 px window`);
-    const drawn = await analyse(page);
+    const drawn = await analysePicture(page, 'viewer');
     assert.equal(drawn.width, s.width, 'the screenshot has the drawing buffer size');
     assert.deepEqual(errors, []);
   } finally {

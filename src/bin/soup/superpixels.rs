@@ -51,12 +51,7 @@ pub fn run(args: Args) -> Result<()> {
     if let Some(path) = &args.mean {
         write_file(path, &encode_png(&mean_colour(&sp))?)?;
     }
-    let smallest = sp
-        .segments
-        .iter()
-        .map(|s| s.pixels.len())
-        .min()
-        .unwrap_or(0);
+    let smallest = sp.smallest_size();
     println!(
         "{} superpixels (requested {}), smallest {smallest} pixels, {ms:.0} ms",
         sp.len(),
