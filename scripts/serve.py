@@ -86,6 +86,15 @@ class Handler(http.server.SimpleHTTPRequestHandler):
             super().log_message(format, *args)
 
 
+class Server(http.server.ThreadingHTTPServer):
+    def handle_error(self, request, client_address):
+        # A browser that closes a connection mid-transfer (a tab closed, a worker restarted by a
+        # cancel) is normal, not an error worth a traceback.
+        if isinstance(sys.exc_info()[1], (BrokenPipeError, ConnectionResetError)):
+            return
+        super().handle_error(request, client_address)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--port", type=int, default=int(os.environ.get("PORT", "8080")))
@@ -95,7 +104,7 @@ def main():
 
     handler = functools.partial(Handler, directory=args.dir)
     try:
-        server = http.server.ThreadingHTTPServer((args.bind, args.port), handler)
+        server = Server((args.bind, args.port), handler)
     except OSError as e:
         sys.exit(f"serve.py: cannot listen on {args.bind}:{args.port}: {e.strerror}")
     host, port = server.server_address[:2]
