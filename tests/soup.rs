@@ -219,3 +219,35 @@ fn identical_frames_and_pure_rotation_have_no_parallax() {
     .unwrap_err();
     assert!(matches!(err, Error::NoParallax(_)), "{err}");
 }
+
+#[test]
+fn scale_band_is_centred_on_equal_median_depths() {
+    // Body B moves almost with the camera: its unit-scale depths come out 20 times those of
+    // body A although both lie on z = 10. The band bounds depth ratios between bodies, not
+    // ratios of unit scales, so even a narrow band lets the solve reach the true scale.
+    let delta = Vector3::new(-0.95, 0.0, 0.0);
+    let (mut soup, sp) = two_body_soup(delta);
+    let knn = knn_graph(&sp, 8, 3.0);
+    let boundaries = BoundaryGraph { edges: Vec::new() };
+    let flow = Grid::filled(100, 100, [0.0f32, 0.0]);
+    let inputs = ScaleInputs {
+        superpixels: &sp,
+        knn: &knn,
+        boundaries: &boundaries,
+        flow: &flow,
+        intrinsics: &K,
+    };
+    let params = ScaleParams {
+        band: 2.0,
+        ..ScaleParams::default()
+    };
+    solve_scales(&mut soup, &inputs, &params);
+    let ray = Vector3::new(0.0, 0.0, 1.0);
+    let (depth_a, depth_b) = (soup.pieces[0].depth(&ray), soup.pieces[5].depth(&ray));
+    println!("depth ratio B / A = {:.4}", depth_b / depth_a);
+    assert!(
+        (0.5 - 1e-9..=2.0 + 1e-9).contains(&(depth_b / depth_a)),
+        "depth ratio {} outside the band",
+        depth_b / depth_a
+    );
+}

@@ -27,7 +27,10 @@
 //! The terms between two groups add up to a one-dimensional φ_ab(δ), tabulated once. A spanning
 //! tree of the most sharply determined group pairs gives the start; coordinate descent then
 //! moves one group at a time to the global minimum of its own terms (grid search, then golden
-//! section) until nothing improves. Scales stay within a band of the largest group's.
+//! section) until nothing improves. The search is centred where every group has median depth 1
+//! (unit-scale depths of different motions can differ by orders of magnitude), and each group's
+//! median depth stays within a band around the largest group's: the energy is often lowest
+//! with a mover shrunk towards the camera, and the band is the bound on that.
 //!
 //! (Letting single pieces leave their group's scale, against a penalty, was tried for deforming
 //! surfaces: on the synthetic flag it did not help, and on rigid scenes the planar approximation's
@@ -50,7 +53,7 @@ pub struct ScaleParams {
     /// σ: truncation of a boundary pair's relative 3D gap (gap / depth), so real depth
     /// discontinuities cost a bounded amount.
     pub sigma: f64,
-    /// Group scales stay within [1/band, band] of the largest group's.
+    /// Each group's median depth stays within [1/band, band] times the largest group's.
     pub band: f64,
     /// At most this many pixel pairs are used per touching pair of superpixels (evenly spaced).
     pub pairs_per_boundary: usize,
@@ -154,10 +157,27 @@ struct Problem {
     terms: Vec<PieceTerm>,
     group_of: Vec<usize>,
     group_sizes: Vec<usize>,
+    /// Per group, the log-scale that brings its median unit-scale anchor depth to 1: the
+    /// centre of the scale search, so that the band bounds depth ratios between groups.
+    centre: Vec<f64>,
     sigma: f64,
 }
 
 impl Problem {
+    /// True when the piece log-scales `s` keep every group's median depth within
+    /// [1/band, band] times the largest group's (see [`group_centres`]).
+    fn within_band(&self, s: &[f64], band: f64) -> bool {
+        let reference = (0..self.group_sizes.len())
+            .max_by_key(|&g| (self.group_sizes[g], std::cmp::Reverse(g)));
+        let Some(r) = reference else { return true };
+        let mut u = vec![0.0; self.group_sizes.len()];
+        for (&g, &v) in self.group_of.iter().zip(s) {
+            u[g] = v - self.centre[g];
+        }
+        let limit = band.max(1.0).ln() + 1e-9;
+        u.iter().all(|&v| (v - u[r]).abs() <= limit)
+    }
+
     /// E at piece log-scales `s`; `arap_only` drops the contact terms.
     fn energy(&self, s: &[f64], arap_only: bool) -> f64 {
         self.terms
@@ -191,8 +211,8 @@ pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams)
 
     let (group_scales, sweeps) = solve_groups(&problem, params);
     let mut s: Vec<f64> = problem.group_of.iter().map(|&g| group_scales[g]).collect();
-    // The solver must not lose to its start.
-    if problem.energy(&s, false) > energy_start {
+    // The solver must not lose to its start, where that start respects the band.
+    if problem.energy(&s, false) > energy_start && problem.within_band(&zero, params.band) {
         s = zero;
     }
     let (energy_end, arap_end) = (problem.energy(&s, false), problem.energy(&s, true));
@@ -291,12 +311,42 @@ fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Pro
             }
         }
     }
+    let centre = group_centres(soup, inputs, &group_of, group_sizes.len());
     Problem {
         terms,
         group_of,
         group_sizes,
+        centre,
         sigma: params.sigma,
     }
+}
+
+/// Per group, −median ln z over its pieces' unit-scale anchor depths z (0 for a group without
+/// a finite positive depth). Unit-scale depths of different hypotheses can differ by orders of
+/// magnitude (a slow mover's unit translation blows its depths up), so scales are searched
+/// around these centres, where every group has median depth 1.
+fn group_centres(soup: &Soup, inputs: &ScaleInputs, group_of: &[usize], count: usize) -> Vec<f64> {
+    let mut log_depths = vec![Vec::new(); count];
+    for (i, (piece, &g)) in soup.pieces.iter().zip(group_of).enumerate() {
+        let a = inputs.superpixels.segments[i].anchor;
+        let z = 1.0
+            / piece
+                .m
+                .dot(&Vector3::from(inputs.intrinsics.ray(a[0], a[1])));
+        if z.is_finite() && z > 0.0 {
+            log_depths[g].push(z.ln());
+        }
+    }
+    log_depths
+        .into_iter()
+        .map(|mut v| {
+            if v.is_empty() {
+                return 0.0;
+            }
+            v.sort_by(f64::total_cmp);
+            -v[v.len() / 2]
+        })
+        .collect()
 }
 
 /// The group of every piece (pieces sharing a hypothesis) and the size of every group.
@@ -336,18 +386,23 @@ fn contact_evidence(m_a: &Vector3<f64>, m_b: &Vector3<f64>, f_p: [f32; 2], f_q: 
     if e.is_finite() { e.max(0.2) } else { 1.0 }
 }
 
-/// All terms between one pair of groups (a < b), tabulated over δ = s_a − s_b.
+/// All terms between one pair of groups (a < b), tabulated over u_a − u_b, where a group's
+/// log-scale is s = centre + u (see [`group_centres`]).
 struct Link {
     a: usize,
     b: usize,
+    /// centre_a − centre_b: δ = s_a − s_b = offset + (u_a − u_b).
+    offset: f64,
     /// Terms with their orientation: +1 when the term's first piece is in group a.
     terms: Vec<(f64, usize)>,
-    /// φ(δ) at δ = −range + j · GRID_STEP.
+    /// φ at u_a − u_b = −range + j · GRID_STEP.
     table: Vec<f64>,
 }
 
 impl Link {
-    fn value(&self, problem: &Problem, delta: f64) -> f64 {
+    /// φ at u_a − u_b = `du`, summed exactly over the terms.
+    fn value(&self, problem: &Problem, du: f64) -> f64 {
+        let delta = self.offset + du;
         self.terms
             .iter()
             .map(|&(sign, t)| problem.terms[t].term.value(sign * delta, problem.sigma))
@@ -379,38 +434,38 @@ impl Link {
     }
 }
 
-/// One log-scale per group. Returns the scales and the number of sweeps. Coordinate descent
-/// finds a local minimum, so it runs from two starts, the spanning-tree start and all scales
-/// equal (the paper's λ = 1/N), and keeps the lower energy.
+/// One log-scale s per group, searched as s = centre + u (every group at median depth 1 for
+/// u = 0). Returns the scales and the number of sweeps. Coordinate descent finds a local
+/// minimum, so it runs from two starts, the spanning-tree start and u = 0 (all groups at the
+/// same median depth), and keeps the lower energy.
 fn solve_groups(problem: &Problem, params: &ScaleParams) -> (Vec<f64>, usize) {
     let count = problem.group_sizes.len();
     let range = 2.0 * params.band.max(1.0 + 1e-6).ln();
     let links = group_links(problem, range);
     let reference = (0..count).max_by_key(|&g| (problem.group_sizes[g], std::cmp::Reverse(g)));
     let band = params.band.max(1.0).ln();
-    let group_energy = |s: &[f64]| -> f64 {
+    let group_energy = |u: &[f64]| -> f64 {
         links
             .iter()
-            .map(|l| l.value(problem, s[l.a] - s[l.b]))
+            .map(|l| l.value(problem, u[l.a] - u[l.b]))
             .sum()
     };
     let mut best: Option<(f64, Vec<f64>)> = None;
     let mut sweeps = 0;
     for start in [
-        initial_log_scales(&links, count, reference, range),
+        initial_log_scales(&links, count, reference, range, band),
         vec![0.0; count],
     ] {
-        let mut s = start;
-        sweeps += descend_groups(problem, &links, &mut s, reference, band, range);
-        let e = group_energy(&s);
+        let mut u = start;
+        sweeps += descend_groups(problem, &links, &mut u, reference, band, range);
+        let e = group_energy(&u);
         if best.as_ref().is_none_or(|(b, _)| e < *b) {
-            best = Some((e, s));
+            best = Some((e, u));
         }
     }
-    (
-        best.map(|(_, s)| s).unwrap_or_else(|| vec![0.0; count]),
-        sweeps,
-    )
+    let u = best.map(|(_, u)| u).unwrap_or_else(|| vec![0.0; count]);
+    let s: Vec<f64> = u.iter().zip(&problem.centre).map(|(u, c)| u + c).collect();
+    (s, sweeps)
 }
 
 /// The terms between different groups, tabulated per group pair.
@@ -434,6 +489,7 @@ fn group_links(problem: &Problem, range: f64) -> Vec<Link> {
             let mut link = Link {
                 a,
                 b,
+                offset: problem.centre[a] - problem.centre[b],
                 terms,
                 table: Vec::new(),
             };
@@ -446,12 +502,14 @@ fn group_links(problem: &Problem, range: f64) -> Vec<Link> {
 }
 
 /// Start: walk a maximum spanning tree of the links' sharpness from the reference group, giving
-/// each group the best log-ratio to its tree parent. Groups not linked keep 0.
+/// each group the best log-ratio to its tree parent, kept within ±`band` of the reference (at
+/// 0). Groups not linked keep 0.
 fn initial_log_scales(
     links: &[Link],
     count: usize,
     reference: Option<usize>,
     range: f64,
+    band: f64,
 ) -> Vec<f64> {
     let mut s = vec![0.0; count];
     let Some(root) = reference else { return s };
@@ -469,10 +527,10 @@ fn initial_log_scales(
         let l = &links[e];
         let delta = l.best_delta(range);
         if placed[l.a] {
-            s[l.b] = s[l.a] - delta;
+            s[l.b] = (s[l.a] - delta).clamp(-band, band);
             placed[l.b] = true;
         } else {
-            s[l.a] = s[l.b] + delta;
+            s[l.a] = (s[l.b] + delta).clamp(-band, band);
             placed[l.a] = true;
         }
     }
@@ -528,7 +586,11 @@ fn descend_groups(
                 .map(|j| centre - band + j as f64 * GRID_STEP)
                 .min_by(|&a, &b| local(g, a, s, false).total_cmp(&local(g, b, s, false)))
                 .unwrap_or(s[g]);
-            let refined = golden(best - GRID_STEP, best + GRID_STEP, |v| local(g, v, s, true));
+            let (lo, hi) = (
+                (best - GRID_STEP).max(centre - band),
+                (best + GRID_STEP).min(centre + band),
+            );
+            let refined = golden(lo, hi, |v| local(g, v, s, true));
             if local(g, refined, s, true) < current - 1e-12 {
                 moved |= (refined - s[g]).abs() > 1e-4;
                 s[g] = refined;
