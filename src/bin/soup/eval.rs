@@ -155,7 +155,8 @@ fn evaluate(
 
 /// Per motion hypothesis in use: superpixels, pixels, the ground-truth group holding most of its
 /// pixels and that share (purity), and its scale error: the solved λ (after the global median
-/// alignment) over the oracle scale median(z_gt / z) of its own pixels, minus 1.
+/// alignment) over the oracle scale median(z_gt / z) of its own pixels, minus 1; and the part of
+/// the MRE its pixels make up.
 fn print_groups(rec: &Reconstruction, case: &Case) {
     let Some(gt) = case.depth1.as_ref() else {
         return;
@@ -187,6 +188,7 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
     if all.is_empty() {
         return;
     }
+    let valid = all.len() as f64;
     let global = median(all);
     // The energy of the scale solve at its solution and at oracle scales (one per hypothesis):
     // oracle lower than solved means the solver missed; higher means the energy is wrong there.
@@ -227,8 +229,10 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
         energy(&rec.soup),
         energy(&oracle_soup)
     );
-    println!("| hypothesis | superpixels | pixels | main GT group | purity | scale error |");
-    println!("| --- | --- | --- | --- | --- | --- |");
+    println!(
+        "| hypothesis | superpixels | pixels | main GT group | purity | scale error | MRE share |"
+    );
+    println!("| --- | --- | --- | --- | --- | --- | --- |");
     for h in 0..hyps {
         if pieces[h] == 0 || ratios[h].is_empty() {
             continue;
@@ -245,9 +249,15 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
                 )
             })
             .unwrap_or((0, 0.0));
+        // This hypothesis's pixels' part of the MRE (the column sums to the MRE).
+        let mre_share = ratios[h]
+            .iter()
+            .map(|r| (global / r - 1.0).abs())
+            .sum::<f64>()
+            / valid;
         let oracle = median(ratios[h].clone());
         println!(
-            "| {h} | {} | {count} | {} | {:.2} | {:+.3} |",
+            "| {h} | {} | {count} | {} | {:.2} | {:+.3} | {mre_share:.4} |",
             pieces[h],
             if case.groups1.is_some() {
                 main.to_string()
@@ -255,7 +265,7 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
                 "–".into()
             },
             share,
-            global / oracle - 1.0
+            global / oracle - 1.0,
         );
     }
 }
