@@ -245,6 +245,10 @@ const INFINITE: f64 = 1e12;
 /// Minimum s–t cut by Dinic's algorithm on a graph of `n` inner nodes plus source and sink.
 struct MaxFlow {
     n: usize,
+    /// Per inner node, the net terminal cost: > 0 is paid on the sink side (an arc from the
+    /// source), < 0 on the source side (an arc to the sink). Summed over all terms of a node and
+    /// turned into at most one arc when solving, instead of one arc per term.
+    terminal: Vec<f64>,
     head: Vec<usize>,
     /// Per edge: target node, residual capacity, next edge from the same node.
     to: Vec<usize>,
@@ -259,6 +263,7 @@ impl MaxFlow {
     fn new(n: usize) -> Self {
         MaxFlow {
             n,
+            terminal: vec![0.0; n],
             head: vec![NONE; n + 2],
             to: Vec::new(),
             cap: Vec::new(),
@@ -285,24 +290,26 @@ impl MaxFlow {
         }
     }
 
-    /// Costs `switch` if node i ends on the sink side (x_i = 1) and `keep` if on the source side.
+    /// Costs `switch` if node i ends on the sink side (x_i = 1) and `keep` if on the source side
+    /// (up to a constant: only the difference matters to the cut).
     fn add_terminal(&mut self, i: usize, switch: f64, keep: f64) {
-        let m = switch.min(keep);
-        let (switch, keep) = (switch - m, keep - m);
-        if switch > 0.0 {
-            self.arc(self.source(), i, switch, 0.0);
-        }
-        if keep > 0.0 {
-            self.arc(i, self.sink(), keep, 0.0);
-        }
+        self.terminal[i] += switch - keep;
     }
 
     /// Adds the term `c · x_i` (up to a constant).
     fn add_linear(&mut self, i: usize, c: f64) {
-        if c > 0.0 {
-            self.add_terminal(i, c, 0.0);
-        } else if c < 0.0 {
-            self.add_terminal(i, 0.0, -c);
+        self.terminal[i] += c;
+    }
+
+    /// Turns the summed terminal costs into arcs (once, before solving).
+    fn add_terminal_arcs(&mut self) {
+        for i in 0..self.n {
+            let c = std::mem::take(&mut self.terminal[i]);
+            if c > 0.0 {
+                self.arc(self.source(), i, c, 0.0);
+            } else if c < 0.0 {
+                self.arc(i, self.sink(), -c, 0.0);
+            }
         }
     }
 
@@ -314,6 +321,7 @@ impl MaxFlow {
     }
 
     fn solve(&mut self) {
+        self.add_terminal_arcs();
         while self.bfs() {
             let mut iter = self.head.clone();
             while self.push(self.source(), f64::INFINITY, &mut iter) > 0.0 {}
