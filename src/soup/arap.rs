@@ -89,7 +89,7 @@ pub struct ArapReport {
 }
 
 /// Step of the tabulated log-ratio grid.
-const GRID_STEP: f64 = 0.01;
+const GRID_STEP: f64 = 0.02;
 
 /// A term between two pieces, as a function of the log-ratio of their scales.
 enum Term {
