@@ -9,7 +9,7 @@ use superpixel_soup::geometry::essential::Motion;
 use superpixel_soup::grid::Grid;
 use superpixel_soup::image::{ExifInfo, Frame, LoadedImage};
 use superpixel_soup::input::prepare_pair;
-use superpixel_soup::soup::arap::{ScaleInputs, ScaleParams, solve_scales};
+use superpixel_soup::soup::arap::{ArapReport, ScaleInputs, ScaleParams, solve_scales};
 use superpixel_soup::soup::{Piece, Soup};
 use superpixel_soup::superpixels::graph::{BoundaryGraph, knn_graph};
 use superpixel_soup::superpixels::{Segment, Superpixels};
@@ -71,13 +71,11 @@ fn two_body_soup(delta: Vector3<f64>) -> (Soup, Superpixels) {
     (Soup { pieces, hypotheses }, sp)
 }
 
-#[test]
-fn arap_recovers_the_relative_scale_of_two_bodies() {
-    // Body B drifts slightly towards the camera while the camera translates sideways.
-    let delta = Vector3::new(0.0, 0.0, -0.3);
+/// [`two_body_soup`] with its scales solved by `params` from the K-NN (ARAP) terms alone (no
+/// touching boundaries), and the solve's report.
+fn solve_two_bodies(delta: Vector3<f64>, params: &ScaleParams) -> (Soup, ArapReport) {
     let (mut soup, sp) = two_body_soup(delta);
     let knn = knn_graph(&sp, 8, 3.0);
-    // No touching boundaries: the K-NN (ARAP) terms alone decide.
     let boundaries = BoundaryGraph { edges: Vec::new() };
     let flow = Grid::filled(100, 100, [0.0f32, 0.0]);
     let inputs = ScaleInputs {
@@ -87,7 +85,15 @@ fn arap_recovers_the_relative_scale_of_two_bodies() {
         flow: &flow,
         intrinsics: &K,
     };
-    let report = solve_scales(&mut soup, &inputs, &ScaleParams::default());
+    let report = solve_scales(&mut soup, &inputs, params);
+    (soup, report)
+}
+
+#[test]
+fn arap_recovers_the_relative_scale_of_two_bodies() {
+    // Body B drifts slightly towards the camera while the camera translates sideways.
+    let delta = Vector3::new(0.0, 0.0, -0.3);
+    let (soup, report) = solve_two_bodies(delta, &ScaleParams::default());
     let (a, b) = (&soup.pieces[..], &soup.pieces[5..]);
     let lambda_a: Vec<f64> = (0..10)
         .flat_map(|j| (0..5).map(move |i| j * 10 + i))
@@ -225,23 +231,11 @@ fn scale_band_is_centred_on_equal_median_depths() {
     // Body B moves almost with the camera: its unit-scale depths come out 20 times those of
     // body A although both lie on z = 10. The band bounds depth ratios between bodies, not
     // ratios of unit scales, so even a narrow band lets the solve reach the true scale.
-    let delta = Vector3::new(-0.95, 0.0, 0.0);
-    let (mut soup, sp) = two_body_soup(delta);
-    let knn = knn_graph(&sp, 8, 3.0);
-    let boundaries = BoundaryGraph { edges: Vec::new() };
-    let flow = Grid::filled(100, 100, [0.0f32, 0.0]);
-    let inputs = ScaleInputs {
-        superpixels: &sp,
-        knn: &knn,
-        boundaries: &boundaries,
-        flow: &flow,
-        intrinsics: &K,
-    };
     let params = ScaleParams {
         band: 2.0,
         ..ScaleParams::default()
     };
-    solve_scales(&mut soup, &inputs, &params);
+    let (soup, _) = solve_two_bodies(Vector3::new(-0.95, 0.0, 0.0), &params);
     let ray = Vector3::new(0.0, 0.0, 1.0);
     let (depth_a, depth_b) = (soup.pieces[0].depth(&ray), soup.pieces[5].depth(&ray));
     println!("depth ratio B / A = {:.4}", depth_b / depth_a);
