@@ -164,12 +164,17 @@ struct Problem {
 }
 
 impl Problem {
+    /// The group with the most pieces (the lowest index among equals): the scale reference.
+    fn largest_group(&self) -> Option<usize> {
+        (0..self.group_sizes.len()).max_by_key(|&g| (self.group_sizes[g], std::cmp::Reverse(g)))
+    }
+
     /// True when the piece log-scales `s` keep every group's median depth within
     /// [1/band, band] times the largest group's (see [`group_centres`]).
     fn within_band(&self, s: &[f64], band: f64) -> bool {
-        let reference = (0..self.group_sizes.len())
-            .max_by_key(|&g| (self.group_sizes[g], std::cmp::Reverse(g)));
-        let Some(r) = reference else { return true };
+        let Some(r) = self.largest_group() else {
+            return true;
+        };
         let mut u = vec![0.0; self.group_sizes.len()];
         for (&g, &v) in self.group_of.iter().zip(s) {
             u[g] = v - self.centre[g];
@@ -255,16 +260,19 @@ fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Pro
         intrinsics: k,
     } = *inputs;
     let (group_of, group_sizes) = groups(soup);
-    let anchor = |i: usize| {
-        let a = sp.segments[i].anchor;
-        soup.pieces[i].unit_point(&Vector3::from(k.ray(a[0], a[1])))
-    };
+    // Unit-scale anchor points in frame 1, once per piece.
+    let anchors: Vec<Vector3<f64>> = soup
+        .pieces
+        .iter()
+        .zip(&sp.segments)
+        .map(|(piece, seg)| piece.unit_point(&Vector3::from(k.ray(seg.anchor[0], seg.anchor[1]))))
+        .collect();
     let moved = |i: usize, x: &Vector3<f64>| soup.pieces[i].r * x + soup.pieces[i].t_hat;
     let mut terms = Vec::new();
     for (i, list) in knn.neighbours.iter().enumerate() {
         for &(kk, w) in list {
             let kk = kk as usize;
-            let (xi, xk) = (anchor(i), anchor(kk));
+            let (xi, xk) = (anchors[i], anchors[kk]);
             terms.push(PieceTerm {
                 i,
                 k: kk,
@@ -311,7 +319,7 @@ fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Pro
             }
         }
     }
-    let centre = group_centres(soup, inputs, &group_of, group_sizes.len());
+    let centre = group_centres(&anchors, &group_of, group_sizes.len());
     Problem {
         terms,
         group_of,
@@ -321,18 +329,14 @@ fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Pro
     }
 }
 
-/// Per group, −median ln z over its pieces' unit-scale anchor depths z (0 for a group without
-/// a finite positive depth). Unit-scale depths of different hypotheses can differ by orders of
+/// Per group, −median ln z over the depths z of its pieces' unit-scale `anchors` (0 for a group
+/// without a finite positive depth). Unit-scale depths of different hypotheses can differ by orders of
 /// magnitude (a slow mover's unit translation blows its depths up), so scales are searched
 /// around these centres, where every group has median depth 1.
-fn group_centres(soup: &Soup, inputs: &ScaleInputs, group_of: &[usize], count: usize) -> Vec<f64> {
+fn group_centres(anchors: &[Vector3<f64>], group_of: &[usize], count: usize) -> Vec<f64> {
     let mut log_depths = vec![Vec::new(); count];
-    for (i, (piece, &g)) in soup.pieces.iter().zip(group_of).enumerate() {
-        let a = inputs.superpixels.segments[i].anchor;
-        let z = 1.0
-            / piece
-                .m
-                .dot(&Vector3::from(inputs.intrinsics.ray(a[0], a[1])));
+    for (anchor, &g) in anchors.iter().zip(group_of) {
+        let z = anchor.z;
         if z.is_finite() && z > 0.0 {
             log_depths[g].push(z.ln());
         }
@@ -442,7 +446,7 @@ fn solve_groups(problem: &Problem, params: &ScaleParams) -> (Vec<f64>, usize) {
     let count = problem.group_sizes.len();
     let range = 2.0 * params.band.max(1.0 + 1e-6).ln();
     let links = group_links(problem, range);
-    let reference = (0..count).max_by_key(|&g| (problem.group_sizes[g], std::cmp::Reverse(g)));
+    let reference = problem.largest_group();
     let band = params.band.max(1.0).ln();
     let group_energy = |u: &[f64]| -> f64 {
         links
