@@ -239,6 +239,18 @@ pub struct PageReconstruction {
     rec: Reconstruction,
 }
 
+impl PageReconstruction {
+    /// Frame-1 depth of the unit-scale soup (every superpixel at λ = 1, before the scale solve).
+    fn unorganised_depth(&self) -> crate::Grid<f32> {
+        let rec = &self.rec;
+        dense_depth(
+            &rec.unit_soup,
+            &rec.superpixels.labels,
+            &rec.report.camera.intrinsics,
+        )
+    }
+}
+
 #[wasm_bindgen]
 impl PageReconstruction {
     /// Width of the working resolution, in pixels (the pictures' width).
@@ -266,7 +278,7 @@ impl PageReconstruction {
                 cloud_labels(labels, &self.rec.depth),
             ),
             "unorganised" => {
-                let depth = dense_depth(&self.rec.unit_soup, labels, k);
+                let depth = self.unorganised_depth();
                 let (c1, c2) = point_clouds(&self.rec.unit_soup, labels, &depth, &self.frame1, k);
                 CloudBuffers::new(&c1, &c2, cloud_labels(labels, &depth))
             }
@@ -288,10 +300,7 @@ impl PageReconstruction {
         let rec = &self.rec;
         let frame = match name {
             "depth" => depth_picture(&rec.depth),
-            "unorganised" => {
-                let k = &rec.report.camera.intrinsics;
-                depth_picture(&dense_depth(&rec.unit_soup, &rec.superpixels.labels, k))
-            }
+            "unorganised" => depth_picture(&self.unorganised_depth()),
             "superpixels" => boundary_overlay(&self.frame1, &rec.superpixels, [255, 230, 0]),
             "flow" => flow_picture_with_reliability(&rec.flow, &rec.reliable),
             other => {
