@@ -82,7 +82,7 @@ impl SuperpixelsResult {
     /// opaque) ready for `new ImageData(...)`.
     #[wasm_bindgen(js_name = overlayPicture)]
     pub fn overlay_picture(&self) -> Vec<u8> {
-        opaque_rgba(&boundary_overlay(
+        super::rgba(&boundary_overlay(
             &self.frame,
             &self.superpixels,
             BOUNDARY_COLOUR,
@@ -93,7 +93,7 @@ impl SuperpixelsResult {
     /// [`overlayPicture`](Self::overlay_picture).
     #[wasm_bindgen(js_name = meanPicture)]
     pub fn mean_picture(&self) -> Vec<u8> {
-        opaque_rgba(&mean_colour(&self.superpixels))
+        super::rgba(&mean_colour(&self.superpixels))
     }
 }
 
@@ -117,13 +117,4 @@ pub fn compute_superpixels(
     };
     let superpixels = slic(&frame, &params)?;
     Ok(SuperpixelsResult { frame, superpixels })
-}
-
-/// A frame as opaque RGBA bytes.
-fn opaque_rgba(frame: &Frame) -> Vec<u8> {
-    frame
-        .data()
-        .iter()
-        .flat_map(|&[r, g, b]| [r, g, b, 255])
-        .collect()
 }
