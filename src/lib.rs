@@ -18,6 +18,7 @@ pub mod geometry;
 pub mod grid;
 pub mod image;
 pub mod input;
+pub mod mrf;
 pub mod output;
 pub mod pipeline;
 pub mod render;

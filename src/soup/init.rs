@@ -16,7 +16,7 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::graphcut::{CostTable, alpha_expansion};
+use crate::mrf::graphcut::{CostTable, alpha_expansion};
 use super::plane::{fit_plane, planar_cost};
 use super::{Piece, Soup};
 use crate::camera::Intrinsics;

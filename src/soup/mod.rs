@@ -9,7 +9,6 @@
 //! The later refinement step (particle BP, eq. 3–6) will take a [`Soup`] and return a refined one.
 
 pub mod arap;
-pub mod graphcut;
 pub mod init;
 pub mod plane;
 
