@@ -1,13 +1,14 @@
 //! Timings of the soup stages (everything after flow and superpixels: motion hypotheses,
-//! assignment, planes, ARAP scales, outputs) at 1024×436 with exact flow, single thread.
+//! assignment, planes, contact scales, refinement, outputs) at 1024×436 with exact flow, single thread.
 //! Run with `cargo bench --bench soup`.
 
 mod common;
 
 use superpixel_soup::flow::is_known;
 use superpixel_soup::output::{dense_depth, point_clouds};
-use superpixel_soup::soup::arap::{ScaleInputs, ScaleParams, solve_scales};
 use superpixel_soup::soup::init::{InitParams, unit_scale_soup};
+use superpixel_soup::soup::refine::{Problem, RefineParams, refine};
+use superpixel_soup::soup::scales::{ScaleInputs, ScaleParams, solve_scales};
 use superpixel_soup::superpixels::graph::{boundary_graph, knn_graph};
 use superpixel_soup::superpixels::{SlicParams, slic};
 use superpixel_soup::synth::{SceneKind, render};
@@ -30,9 +31,9 @@ fn main() {
         let scales = ScaleParams::default();
         let inputs = ScaleInputs {
             superpixels: &sp,
-            knn: &knn,
             boundaries: &boundaries,
             flow: &s.flow12,
+            reliable: &reliable,
             intrinsics: &k,
         };
         let init = || unit_scale_soup(&sp, &knn, &adjacency, &s.flow12, &reliable, &k, &params);
@@ -47,13 +48,20 @@ fn main() {
             let mut soup = unit.clone();
             solve_scales(&mut soup, &inputs, &scales)
         });
-        common::print_row(
-            &format!("ARAP scales ({})", kind.name()),
-            "1024×436",
-            &times,
-        );
+        common::print_row(&format!("scales ({})", kind.name()), "1024×436", &times);
         let mut soup = unit.clone();
         solve_scales(&mut soup, &inputs, &scales);
+        for (name, refine_params) in [
+            ("refinement", RefineParams::default()),
+            ("refinement, paper preset", RefineParams::paper()),
+        ] {
+            let times = common::time_ms(1, || {
+                let mut refined = soup.clone();
+                let problem = Problem::new(&refined, &inputs, &scales, &refine_params);
+                refine(&mut refined, &problem)
+            });
+            common::print_row(&format!("{name} ({})", kind.name()), "1024×436", &times);
+        }
         let times = common::time_ms(3, || {
             let depth = dense_depth(&soup, &sp.labels, &k);
             point_clouds(&soup, &sp.labels, &depth, &s.frame1, &k)

@@ -12,8 +12,9 @@ use crate::grid::Grid;
 use crate::input::FramePair;
 use crate::output::{dense_depth, depth_at, point_clouds, scene_flow};
 use crate::soup::Soup;
-use crate::soup::arap::{ArapReport, ScaleInputs, ScaleParams, solve_scales};
 use crate::soup::init::{InitParams, unit_scale_soup};
+use crate::soup::refine::{self, RefineParams, RefineReport};
+use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, solve_scales};
 use crate::superpixels::graph::{BoundaryGraph, KnnGraph, boundary_graph, knn_graph};
 use crate::superpixels::{SlicParams, Superpixels, slic};
 
@@ -25,16 +26,18 @@ pub enum Stage {
     Superpixels,
     Motion,
     Scales,
+    Refine,
     Outputs,
 }
 
 impl Stage {
     /// Every stage, in the order the pipeline runs them.
-    pub const ALL: [Stage; 5] = [
+    pub const ALL: [Stage; 6] = [
         Stage::Flow,
         Stage::Superpixels,
         Stage::Motion,
         Stage::Scales,
+        Stage::Refine,
         Stage::Outputs,
     ];
 
@@ -45,6 +48,7 @@ impl Stage {
             Stage::Superpixels => "superpixels",
             Stage::Motion => "motion",
             Stage::Scales => "scales",
+            Stage::Refine => "refine",
             Stage::Outputs => "outputs",
         }
     }
@@ -54,12 +58,13 @@ impl Stage {
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Params {
     pub superpixels: SlicParams,
-    /// Neighbours in the K-NN graph of the ARAP energy.
+    /// Neighbours in the K-NN graph (local motion hypotheses are fitted on a superpixel and these).
     pub k: usize,
     /// β of the weights exp(−β ‖s_i − s_k‖) (anchors normalised by the long side).
     pub beta: f64,
     pub init: InitParams,
     pub scales: ScaleParams,
+    pub refine: RefineParams,
 }
 
 impl Default for Params {
@@ -70,6 +75,7 @@ impl Default for Params {
             beta: 3.0,
             init: InitParams::default(),
             scales: ScaleParams::default(),
+            refine: RefineParams::default(),
         }
     }
 }
@@ -101,7 +107,10 @@ pub struct Report {
     pub superpixels: usize,
     pub degenerate: usize,
     pub hypotheses: usize,
-    pub arap: ArapReport,
+    /// The scale solve: energies, rigid segments, pieces moved by tail control.
+    pub scales: ScaleReport,
+    /// The refinement's energy per iteration (`None` when turned off).
+    pub refine: Option<RefineReport>,
     pub notes: Vec<String>,
 }
 
@@ -115,7 +124,7 @@ pub struct Reconstruction {
     pub superpixels: Superpixels,
     /// Touching superpixels and their boundary pixel pairs.
     pub boundaries: BoundaryGraph,
-    /// The K-NN graph over superpixel anchors (the ARAP neighbourhoods).
+    /// The K-NN graph over superpixel anchors (neighbourhoods of the local motion hypotheses).
     pub knn: KnnGraph,
     /// The soup before the scale solve (λ = 1: the "unorganised" soup).
     pub unit_soup: Soup,
@@ -185,13 +194,20 @@ pub fn reconstruct(
     let mut soup = unit_soup.clone();
     let inputs = ScaleInputs {
         superpixels: &sp,
-        knn: &knn,
         boundaries: &boundaries,
         flow: &flow,
+        reliable: &reliable,
         intrinsics: &k,
     };
-    let arap = solve_scales(&mut soup, &inputs, &params.scales);
+    let scales = solve_scales(&mut soup, &inputs, &params.scales);
     timings.push((Stage::Scales, clock.lap()));
+
+    progress(Stage::Refine, 0.0);
+    let refine = (params.refine.iterations > 0).then(|| {
+        let problem = refine::Problem::new(&soup, &inputs, &params.scales, &params.refine);
+        refine::refine(&mut soup, &problem)
+    });
+    timings.push((Stage::Refine, clock.lap()));
 
     progress(Stage::Outputs, 0.0);
     let depth = dense_depth(&soup, &sp.labels, &k);
@@ -220,7 +236,8 @@ pub fn reconstruct(
             .filter(|p| p.degenerate.is_some())
             .count(),
         hypotheses: soup.hypotheses.len(),
-        arap,
+        scales,
+        refine,
         notes: pair.notes.clone(),
     };
     Ok(Reconstruction {

@@ -59,8 +59,7 @@ impl Mrf {
     /// transposed; a self-edge, an unknown node or a table of the wrong size is ignored.
     pub fn add_edge(&mut self, a: usize, b: usize, cost: Vec<f64>) {
         let n = self.unary.len();
-        if a == b || a >= n || b >= n || cost.len() != self.unary[a].len() * self.unary[b].len()
-        {
+        if a == b || a >= n || b >= n || cost.len() != self.unary[a].len() * self.unary[b].len() {
             return;
         }
         if a < b {
@@ -73,7 +72,11 @@ impl Mrf {
                     t[xb * la + xa] = cost[xa * lb + xb];
                 }
             }
-            self.edges.push(Edge { a: b, b: a, cost: t });
+            self.edges.push(Edge {
+                a: b,
+                b: a,
+                cost: t,
+            });
         }
     }
 
@@ -125,8 +128,16 @@ struct Messages {
 impl Messages {
     fn new(mrf: &Mrf) -> Self {
         Messages {
-            to_b: mrf.edges.iter().map(|e| vec![0.0; mrf.labels(e.b)]).collect(),
-            to_a: mrf.edges.iter().map(|e| vec![0.0; mrf.labels(e.a)]).collect(),
+            to_b: mrf
+                .edges
+                .iter()
+                .map(|e| vec![0.0; mrf.labels(e.b)])
+                .collect(),
+            to_a: mrf
+                .edges
+                .iter()
+                .map(|e| vec![0.0; mrf.labels(e.a)])
+                .collect(),
         }
     }
 
@@ -173,8 +184,8 @@ pub fn trws(mrf: &Mrf, options: &TrwsOptions) -> TrwsResult {
                 let edge = &mrf.edges[e];
                 let (la, lb) = (mrf.labels(edge.a), mrf.labels(edge.b));
                 let mut out = vec![f64::INFINITY; lb];
-                for xa in 0..la {
-                    let base = g * belief[xa] - msg.to_a[e][xa];
+                for (xa, (&bel, &back)) in belief.iter().zip(&msg.to_a[e]).enumerate().take(la) {
+                    let base = g * bel - back;
                     let row = &edge.cost[xa * lb..(xa + 1) * lb];
                     for (o, &c) in out.iter_mut().zip(row) {
                         *o = o.min(base + c);
@@ -280,11 +291,11 @@ fn lower_bound(mrf: &Mrf, inc: &Incidence, msg: &Messages) -> f64 {
             let (la, lb) = (mrf.labels(edge.a), mrf.labels(edge.b));
             let node_b = scaled(edge.b);
             let mut out = vec![f64::INFINITY; lb];
-            for xa in 0..la {
-                let base = acc[xa] - msg.to_a[e][xa];
-                for xb in 0..lb {
-                    let v = base + edge.cost[xa * lb + xb] - msg.to_b[e][xb];
-                    out[xb] = out[xb].min(v);
+            for (xa, (&a, &back)) in acc.iter().zip(&msg.to_a[e]).enumerate().take(la) {
+                let base = a - back;
+                let row = &edge.cost[xa * lb..(xa + 1) * lb];
+                for ((o, &c), &m) in out.iter_mut().zip(row).zip(&msg.to_b[e]) {
+                    *o = o.min(base + c - m);
                 }
             }
             acc = out.iter().zip(&node_b).map(|(o, b)| o + b).collect();
@@ -307,7 +318,11 @@ mod tests {
             .collect();
         let mut mrf = Mrf::new(unary);
         for &(a, b) in edges {
-            mrf.add_edge(a, b, (0..labels * labels).map(|_| rng.uniform() * 4.0).collect());
+            mrf.add_edge(
+                a,
+                b,
+                (0..labels * labels).map(|_| rng.uniform() * 4.0).collect(),
+            );
         }
         mrf
     }
@@ -343,7 +358,11 @@ mod tests {
             let r = trws(&mrf, &TrwsOptions::default());
             let exact = brute_force(&mrf);
             assert!((r.energy - exact).abs() < 1e-9, "{} vs {exact}", r.energy);
-            assert!((r.lower_bound - exact).abs() < 1e-6, "bound {} vs {exact}", r.lower_bound);
+            assert!(
+                (r.lower_bound - exact).abs() < 1e-6,
+                "bound {} vs {exact}",
+                r.lower_bound
+            );
         }
     }
 
@@ -389,7 +408,11 @@ mod tests {
             let mrf = random_mrf(&mut rng, 9, 3, &edges);
             let r = trws(&mrf, &TrwsOptions::default());
             let exact = brute_force(&mrf);
-            assert!(r.lower_bound <= exact + 1e-9, "bound {} > min {exact}", r.lower_bound);
+            assert!(
+                r.lower_bound <= exact + 1e-9,
+                "bound {} > min {exact}",
+                r.lower_bound
+            );
             assert!(r.energy >= exact - 1e-9);
             assert!((mrf.energy(&r.labels) - r.energy).abs() < 1e-9);
             gap += (r.energy - exact) / exact;

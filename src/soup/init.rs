@@ -16,7 +16,6 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use crate::mrf::graphcut::{CostTable, alpha_expansion};
 use super::plane::{fit_plane, planar_cost};
 use super::{Piece, Soup};
 use crate::camera::Intrinsics;
@@ -28,6 +27,7 @@ use crate::geometry::essential::{
 };
 use crate::geometry::homography::{homography_dlt, transfer_error};
 use crate::grid::Grid;
+use crate::mrf::graphcut::{CostTable, alpha_expansion};
 use crate::rng::Rng;
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::KnnGraph;

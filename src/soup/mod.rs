@@ -1,16 +1,18 @@
-//! The superpixel soup (the paper's sections 3–4): every superpixel becomes a planar patch with
-//! a rigid motion, first at unit translation ([`init`]: the "unorganised" soup), then with the
-//! relative scales λ solved by the as-rigid-as-possible energy ([`arap`]: the "organised" soup).
+//! The superpixel soup (the paper's sections 3–5): every superpixel becomes a planar patch with
+//! a rigid motion, first at unit translation ([`init`]: the "unorganised" soup), then with a
+//! relative scale λ per superpixel solved from contacts between touching pieces ([`scales`]: the
+//! "organised" soup), then with planes, motions and scales refined together by particle belief
+//! propagation with TRW-S ([`refine`]).
 //!
-//! Conventions (DESIGN.md): camera 1 is the world frame (x right, y down, z forward). A piece's
-//! plane is mᵀX = 1, so a pixel with normalised ray x̄ = K⁻¹[u, v, 1]ᵀ has unit-scale depth
-//! z = 1 / (mᵀx̄). Its motion is X' = R X + λ t̂; scaling a piece by λ scales its depths by λ and
-//! its plane vector m by 1/λ, so the homography K (R + t̂ mᵀ) K⁻¹ is unchanged.
-//! The later refinement step (particle BP, eq. 3–6) will take a [`Soup`] and return a refined one.
+//! Conventions (docs/ARCHITECTURE.md): camera 1 is the world frame (x right, y down, z forward).
+//! A piece's plane is mᵀX = 1, so a pixel with normalised ray x̄ = K⁻¹[u, v, 1]ᵀ has unit-scale
+//! depth z = 1 / (mᵀx̄). Its motion is X' = R X + λ t̂; scaling a piece by λ scales its depths by
+//! λ and its plane vector m by 1/λ, so the homography K (R + t̂ mᵀ) K⁻¹ is unchanged.
 
-pub mod arap;
 pub mod init;
 pub mod plane;
+pub mod refine;
+pub mod scales;
 
 use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use serde::Serialize;
+use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::camera::resolve_intrinsics;
 use superpixel_soup::eval::{DepthMetrics, depth_metrics, median};
 use superpixel_soup::flow::{FlowParams, Preset};
@@ -13,7 +14,8 @@ use superpixel_soup::grid::Grid;
 use superpixel_soup::image::{ExifInfo, LoadedImage};
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
 use superpixel_soup::output::depth_at;
-use superpixel_soup::soup::arap::{ScaleInputs, scale_energy};
+use superpixel_soup::soup::scales::{self, ScaleInputs};
+use superpixel_soup::soup::{Soup, refine};
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
 
 /// Run the reconstruction on cases in the evaluation layout and score the depth.
@@ -41,6 +43,11 @@ pub struct Args {
     /// most of its pixels belong to (and that share) and the error of its solved scale.
     #[arg(long)]
     groups: bool,
+    /// Also run the truth test: the scale energy and MRE of the solution, of the oracle scales
+    /// (each superpixel at median(z_gt / z) of its pixels) and of the oracle scales polished by
+    /// the solver's per-piece descent.
+    #[arg(long)]
+    oracle: bool,
 }
 
 /// Numbers for one case.
@@ -52,6 +59,8 @@ struct CaseResult {
     oracle_superpixel_mre: f64,
     /// MRE with one oracle scale per ground-truth motion group (when the case has groups1.png).
     oracle_group_mre: Option<f64>,
+    /// MRE of one constant depth everywhere (the floor a reconstruction must beat).
+    constant_mre: f64,
     seconds: f64,
     hypotheses: usize,
     degenerate: usize,
@@ -65,16 +74,16 @@ pub fn run(args: Args) -> Result<()> {
     params.k = args.k;
     let flow_params = FlowParams::preset(Preset::from_name(&args.preset)?);
     println!(
-        "| case | MRE | AbsRel | δ<1.25 | coverage | oracle-superpixel MRE | oracle-group MRE | hypotheses | seconds |"
+        "| case | MRE | AbsRel | δ<1.25 | coverage | oracle-superpixel MRE | oracle-group MRE | constant-depth MRE | hypotheses | seconds |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut results = Vec::new();
     for dir in &args.cases {
         let case = read_case(dir)?;
         let computed = (!args.gt_flow).then_some(flow_params);
         let (result, rec) = evaluate(&case, &params, computed)?;
         println!(
-            "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {} | {} | {:.2} |",
+            "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {} | {:.4} | {} | {:.2} |",
             result.case,
             result.metrics.mre,
             result.metrics.abs_rel,
@@ -84,12 +93,16 @@ pub fn run(args: Args) -> Result<()> {
             result
                 .oracle_group_mre
                 .map_or("–".into(), |m| format!("{m:.4}")),
+            result.constant_mre,
             result.hypotheses,
             result.seconds
         );
         results.push(result);
         if args.groups {
             print_groups(&rec, &case);
+        }
+        if args.oracle {
+            print_truth_test(&rec, &case)?;
         }
     }
     if let Some(path) = &args.json {
@@ -144,11 +157,12 @@ fn evaluate(
         metrics,
         oracle_superpixel_mre,
         oracle_group_mre,
+        constant_mre: depth_metrics(gt, &Grid::filled(gt.width(), gt.height(), 1.0f32))?.mre,
         seconds,
         hypotheses: rec.report.hypotheses,
         degenerate: rec.report.degenerate,
-        energy_start: rec.report.arap.energy_start,
-        energy_end: rec.report.arap.energy_end,
+        energy_start: rec.report.scales.energy_start,
+        energy_end: rec.report.scales.energy_end,
     };
     Ok((result, rec))
 }
@@ -190,45 +204,6 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
     }
     let valid = all.len() as f64;
     let global = median(all);
-    // The energy of the scale solve at its solution and at oracle scales (one per hypothesis):
-    // oracle lower than solved means the solver missed; higher means the energy is wrong there.
-    let mut oracle_soup = rec.unit_soup.clone();
-    let mut unit_ratios = vec![Vec::new(); hyps];
-    for (i, (&l, &g)) in labels.data().iter().zip(gt.data()).enumerate() {
-        let piece = &rec.unit_soup.pieces[l as usize];
-        let (x, y) = ((i % labels.width()) as f64, (i / labels.width()) as f64);
-        let z = piece.depth(&nalgebra::Vector3::from(
-            rec.report.camera.intrinsics.ray(x, y),
-        ));
-        if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
-            unit_ratios[piece.hypothesis].push(g as f64 / z);
-        }
-    }
-    let oracle: Vec<f64> = unit_ratios
-        .into_iter()
-        .map(|r| if r.is_empty() { f64::NAN } else { median(r) })
-        .collect();
-    for p in &mut oracle_soup.pieces {
-        p.lambda = if oracle[p.hypothesis].is_finite() {
-            oracle[p.hypothesis]
-        } else {
-            1.0
-        };
-    }
-    let inputs = ScaleInputs {
-        superpixels: &rec.superpixels,
-        knn: &rec.knn,
-        boundaries: &rec.boundaries,
-        flow: &rec.flow,
-        intrinsics: &rec.report.camera.intrinsics,
-    };
-    let energy =
-        |soup: &superpixel_soup::soup::Soup| scale_energy(soup, &inputs, &rec.report.params.scales);
-    println!(
-        "scale energy: solved {:.3}, oracle scales {:.3}",
-        energy(&rec.soup),
-        energy(&oracle_soup)
-    );
     println!(
         "| hypothesis | superpixels | pixels | main GT group | purity | scale error | MRE share |"
     );
@@ -316,4 +291,144 @@ fn oracles(
         .as_ref()
         .map(|g| scaled_by(&|x, y| *g.get(x, y) as usize, 256));
     (per_superpixel, per_group)
+}
+
+/// The truth test: the scale energy ([`scales::Problem`]) and the refinement energy
+/// ([`refine::Problem`]) with the MRE, at the solution and at the ground truth (each superpixel at
+/// its oracle scale median(z_gt / z̄) over its pixels), the truth then polished by the same
+/// optimisers. Truth that polishes to a higher energy than the solution's means the energy
+/// prefers a wrong answer; lower means the optimiser missed it. Also lists the pieces that
+/// carry most of the solution's error.
+fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
+    let Some(gt) = case.depth1.as_ref() else {
+        return Ok(());
+    };
+    let k_in = resolve_intrinsics(case.intrinsics, None, gt.width(), gt.height()).intrinsics;
+    let labels = &rec.superpixels.labels;
+    let (w, h) = gt.size();
+    let oracle_ratios = piece_log_ratios(rec, gt, &k_in);
+    let solved: Vec<f64> = rec.soup.pieces.iter().map(|p| p.lambda.ln()).collect();
+    let oracle: Vec<f64> = oracle_ratios
+        .iter()
+        .zip(&solved)
+        .map(|(r, &s)| r.unwrap_or(s))
+        .collect();
+    let inputs = ScaleInputs {
+        superpixels: &rec.superpixels,
+        boundaries: &rec.boundaries,
+        flow: &rec.flow,
+        reliable: &rec.reliable,
+        intrinsics: &rec.report.camera.intrinsics,
+    };
+    let params = &rec.report.params;
+    let mre_of = |soup: &Soup| -> Result<f64> {
+        Ok(depth_metrics(gt, &depth_at(soup, labels, w, h, &k_in))?.mre)
+    };
+    let at = |s: &[f64]| {
+        let mut soup = rec.unit_soup.clone();
+        scales::set_scales(&mut soup, s);
+        soup
+    };
+    println!("truth test of {}:", case.name);
+    println!("| energy | state | E | MRE |");
+    println!("| --- | --- | --- | --- |");
+    // The scale energy over per-piece log-scales of the unit-scale soup's planes and motions.
+    let problem = scales::build_problem(&rec.unit_soup, &inputs, &params.scales);
+    let mut scaled = rec.unit_soup.clone();
+    scales::solve_scales(&mut scaled, &inputs, &params.scales);
+    let solution: Vec<f64> = scaled.pieces.iter().map(|p| p.lambda.ln()).collect();
+    let mut polished = oracle.clone();
+    scales::polish(&problem, &mut polished, 50);
+    for (name, s) in [
+        ("scale solve", &solution),
+        ("truth", &oracle),
+        ("truth polished", &polished),
+    ] {
+        println!(
+            "| scales | {name} | {:.3} | {:.4} |",
+            problem.energy(s),
+            mre_of(&at(s))?
+        );
+    }
+    // The refinement energy over full states.
+    if params.refine.iterations > 0 {
+        let refine_problem = refine::Problem::new(&scaled, &inputs, &params.scales, &params.refine);
+        let mut truth = at(&oracle);
+        let truth_energy = refine_problem.energy(&truth);
+        let truth_mre = mre_of(&truth)?;
+        refine::refine(&mut truth, &refine_problem);
+        println!(
+            "| refine | solution | {:.3} | {:.4} |",
+            refine_problem.energy(&rec.soup),
+            mre_of(&rec.soup)?
+        );
+        println!("| refine | truth | {truth_energy:.3} | {truth_mre:.4} |");
+        println!(
+            "| refine | truth refined | {:.3} | {:.4} |",
+            refine_problem.energy(&truth),
+            mre_of(&truth)?
+        );
+    }
+    // Pieces carrying most of the error: solved depth / true depth after the global alignment.
+    let shift = median(
+        oracle_ratios
+            .iter()
+            .zip(&solved)
+            .filter_map(|(r, s)| r.map(|r| r - s))
+            .collect(),
+    );
+    let mut rows: Vec<(f64, usize, f64)> = oracle_ratios
+        .iter()
+        .enumerate()
+        .filter_map(|(i, r)| {
+            let ratio = (solved[i] + shift - (*r)?).exp();
+            let px = rec.superpixels.segments[i].pixels.len() as f64;
+            Some(((ratio - 1.0).abs() * px, i, ratio))
+        })
+        .collect();
+    rows.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let total: f64 = rows.iter().map(|r| r.0).sum::<f64>().max(1e-12);
+    for &(weight, i, ratio) in rows.iter().take(5) {
+        let piece = &rec.soup.pieces[i];
+        let [x, y] = rec.superpixels.segments[i].anchor;
+        println!(
+            "  piece {i} at ({x:.0}, {y:.0}): depth {ratio:.2}× the truth, {:.0} % of the error, hypothesis {}{}",
+            100.0 * weight / total,
+            piece.hypothesis,
+            if piece.degenerate.is_some() {
+                ", degenerate"
+            } else {
+                ""
+            }
+        );
+    }
+    Ok(())
+}
+
+/// Per piece of the unit-scale soup, ln median(z_gt / z̄) over its pixels (input resolution,
+/// nearest working-resolution label); `None` for a piece without valid ground truth.
+fn piece_log_ratios(rec: &Reconstruction, gt: &Grid<f32>, k_in: &Intrinsics) -> Vec<Option<f64>> {
+    let labels = &rec.superpixels.labels;
+    let (w, h) = gt.size();
+    let (lw, lh) = labels.size();
+    let unit = depth_at(&rec.unit_soup, labels, w, h, k_in);
+    let mut ratios = vec![Vec::new(); rec.unit_soup.pieces.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let lx = ((x as f64 + 0.5) * lw as f64 / w as f64 - 0.5)
+                .round()
+                .clamp(0.0, (lw - 1) as f64) as usize;
+            let ly = ((y as f64 + 0.5) * lh as f64 / h as f64 - 0.5)
+                .round()
+                .clamp(0.0, (lh - 1) as f64) as usize;
+            let (g, z) = (*gt.get(x, y), *unit.get(x, y));
+            if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
+                ratios[*labels.get(lx, ly) as usize].push((g as f64 / z as f64).ln());
+            }
+        }
+    }
+    ratios
+        .into_iter()
+        .map(|r| (!r.is_empty()).then(|| median(r)))
+        .collect()
 }

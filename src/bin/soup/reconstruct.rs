@@ -34,14 +34,14 @@ pub struct Args {
     /// Requested number of superpixels.
     #[arg(long, default_value_t = 1500)]
     superpixels: usize,
-    /// Neighbours in the K-NN graph of the ARAP energy.
+    /// Neighbours in the K-NN graph (local motion hypotheses).
     #[arg(long, default_value_t = 15)]
     k: usize,
     /// Long side of the working resolution, in pixels.
     #[arg(long, default_value_t = DEFAULT_MAX_SIDE)]
     max_side: usize,
-    /// Skip the refinement step (particle belief propagation; not implemented yet, so this is the
-    /// default behaviour and the flag is accepted for scripts).
+    /// Skip the refinement step (planes, motions and scales by particle belief propagation with
+    /// TRW-S): faster, usually less accurate.
     #[arg(long)]
     no_refine: bool,
     /// Write PLY files as ASCII instead of binary.
@@ -65,6 +65,9 @@ pub fn run(args: Args) -> Result<()> {
     let mut params = Params::default();
     params.superpixels.count = args.superpixels;
     params.k = args.k;
+    if args.no_refine {
+        params.refine.iterations = 0;
+    }
     let rec = reconstruct(&pair, flow, &params, &mut |stage, fraction| {
         if fraction == 0.0 {
             eprintln!("{}…", stage.name());

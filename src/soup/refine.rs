@@ -1,0 +1,450 @@
+//! Refinement of planes, motions and scales together: the paper's section 5 (eq. 3, 4, 6),
+//! solved by max-product particle belief propagation (MP-PBP) with TRW-S.
+//!
+//! Each piece's state θ_i = (R_i, t_i = λ_i t̂_i, plane m_i / λ_i) has 9 degrees of freedom. The
+//! energy is
+//!
+//! E(θ) = w_proj Σ_i E_proj(θ_i) + Σ_(a,b touching) E_cont(θ_a, θ_b)
+//!
+//! - E_proj: the mean planar transfer error (px, capped) of the piece's reliable flow under its
+//!   homography K (R + t mᵀ) K⁻¹; scale-free, and 0 for a piece without reliable flow (its state
+//!   then comes from its neighbours).
+//! - E_cont: for the boundary pixel pairs of a and b (subsampled), on the ray r through each
+//!   pair's midpoint, the truncated log-depth gaps min(|ln z_a − ln z_b|, σ) in frame 1 (depths
+//!   of both planes on r) and in frame 2 (camera-2 depths of both pieces' moved points), with
+//!   the same pair weights as the scale solve ([`super::scales`]); a state with a non-positive
+//!   depth in either frame pays the full truncation.
+//!
+//! Each iteration draws P particles per piece — its current state (particle 0, so the energy
+//! never rises), the current states of its touching neighbours (the moves that matter most:
+//! a piece adopts a neighbour's plane and motion), and Gaussian perturbations of its scale and
+//! plane that shrink over the iterations — tabulates the unary and the P×P pairwise costs, and
+//! takes the TRW-S labelling when it lowers E. After each iteration the median scale is reset
+//! to 1 (E ignores the global scale).
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use super::scales::{self, ScaleInputs, ScaleParams, midpoint_ray, pair_weight};
+use super::{Piece, Soup};
+use crate::mrf::trws::{Mrf, TrwsOptions, trws};
+use crate::rng::Rng;
+
+/// Settings of the refinement.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct RefineParams {
+    /// MP-PBP iterations (0 turns the refinement off). 6 is within a few % of 12 (measured).
+    pub iterations: usize,
+    /// Particles per piece and iteration (the paper uses 50; 16 is within 10 % in energy).
+    pub particles: usize,
+    /// Weight of E_proj (per px of mean transfer error) against the contact terms (each touching
+    /// pair weighs 1 in total, so at most 2σ in both frames): 0.3 lets a piece trade a third of
+    /// a pixel of fit for one contact (measured: 0.2–0.5 give similar MREs, 1 and 3 glue fewer
+    /// wrong pieces back to their neighbours).
+    pub proj_weight: f64,
+    /// Transfer errors are capped at this (px) in E_proj.
+    pub cap_px: f64,
+    /// Reliable-flow samples per piece for E_proj.
+    pub samples: usize,
+    /// Standard deviation of the first iteration's log-scale perturbations; halves each iteration.
+    pub scale_spread: f64,
+    /// Standard deviation of the first iteration's relative plane perturbations; halves each
+    /// iteration.
+    pub plane_spread: f64,
+    /// TRW-S passes per iteration.
+    pub trws_passes: usize,
+    /// Tail control after the refinement: a piece whose depth at its anchor is more than this
+    /// factor from the median piece depth (either way) takes the state of the touching piece
+    /// nearest that median. Depths 30× beyond the median move less than 1/30 of the scene's
+    /// parallax (below flow noise on most pairs), so nothing in the data placed them there.
+    pub max_depth_ratio: f64,
+    /// Seed of the perturbations.
+    pub seed: u64,
+}
+
+impl Default for RefineParams {
+    fn default() -> Self {
+        RefineParams {
+            iterations: 6,
+            particles: 16,
+            proj_weight: 0.3,
+            cap_px: 3.0,
+            samples: 32,
+            scale_spread: 0.2,
+            plane_spread: 0.05,
+            trws_passes: 10,
+            max_depth_ratio: 30.0,
+            seed: 2017,
+        }
+    }
+}
+
+impl RefineParams {
+    /// The paper's setting: 50 particles, 10 iterations.
+    pub fn paper() -> Self {
+        RefineParams {
+            iterations: 10,
+            particles: 50,
+            ..RefineParams::default()
+        }
+    }
+}
+
+/// What the refinement did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct RefineReport {
+    /// E before the first iteration and after each.
+    pub energies: Vec<f64>,
+    /// TRW-S lower bound of each iteration's particle MRF.
+    pub lower_bounds: Vec<f64>,
+    /// Pieces moved by the depth tail control.
+    pub tail_pieces: usize,
+}
+
+/// One touching pair of pieces and the rays and weights of its sampled boundary pairs.
+struct Contact {
+    a: usize,
+    b: usize,
+    rays: Vec<Vector3<f64>>,
+    weights: Vec<f64>,
+}
+
+/// The refinement problem: per piece its flow samples, per touching pair its contact rays.
+pub struct Problem {
+    samples: Vec<Vec<crate::geometry::Correspondence>>,
+    /// Normalised rays through each piece's anchor and the corners of its bounding box.
+    extent_rays: Vec<[Vector3<f64>; 5]>,
+    contacts: Vec<Contact>,
+    neighbours: Vec<Vec<usize>>,
+    focal: f64,
+    sigma: f64,
+    params: RefineParams,
+}
+
+/// Log-depths of a state on a contact's rays, in frame 1 and frame 2 (NaN where behind a camera).
+fn log_depths(piece: &Piece, rays: &[Vector3<f64>]) -> Vec<[f64; 2]> {
+    rays.iter().map(|r| scales::log_depths(piece, r)).collect()
+}
+
+impl Problem {
+    /// Builds the problem for `soup` (its pair weights from its current planes and the flow).
+    pub fn new(
+        soup: &Soup,
+        inputs: &ScaleInputs,
+        scale_params: &ScaleParams,
+        params: &RefineParams,
+    ) -> Self {
+        let sp = inputs.superpixels;
+        let k = inputs.intrinsics;
+        let width = sp.labels.width();
+        let samples = sp
+            .segments
+            .iter()
+            .map(|seg| {
+                let reliable: Vec<u32> = seg
+                    .pixels
+                    .iter()
+                    .copied()
+                    .filter(|&p| inputs.reliable.data()[p as usize])
+                    .collect();
+                let step = reliable.len().div_ceil(params.samples.max(1)).max(1);
+                reliable
+                    .iter()
+                    .step_by(step)
+                    .map(|&p| {
+                        let p = p as usize;
+                        super::init::correspondence(p % width, p / width, inputs.flow.data()[p], k)
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut contacts = Vec::new();
+        let mut neighbours = vec![Vec::new(); soup.pieces.len()];
+        for edge in inputs
+            .boundaries
+            .edges
+            .iter()
+            .filter(|e| !e.pairs.is_empty())
+        {
+            let (a, b) = (edge.a as usize, edge.b as usize);
+            let step = edge
+                .pairs
+                .len()
+                .div_ceil(scale_params.pairs_per_boundary.max(1));
+            let mut rays = Vec::new();
+            let mut weights = Vec::new();
+            for (j, &(p, q)) in edge.pairs.iter().enumerate().step_by(step) {
+                rays.push(midpoint_ray(p, q, width, k));
+                weights.push(pair_weight(soup, inputs, scale_params, edge, j));
+            }
+            let total = weights.len() as f64;
+            weights.iter_mut().for_each(|w| *w /= total);
+            neighbours[a].push(b);
+            neighbours[b].push(a);
+            contacts.push(Contact {
+                a,
+                b,
+                rays,
+                weights,
+            });
+        }
+        Problem {
+            extent_rays: sp
+                .segments
+                .iter()
+                .map(|s| {
+                    let [x0, y0, x1, y1] = s.bbox.map(f64::from);
+                    let ray = |x: f64, y: f64| Vector3::from(k.ray(x, y));
+                    [
+                        ray(s.anchor[0], s.anchor[1]),
+                        ray(x0, y0),
+                        ray(x1, y0),
+                        ray(x0, y1),
+                        ray(x1, y1),
+                    ]
+                })
+                .collect(),
+            samples,
+            contacts,
+            neighbours,
+            focal: 0.5 * (k.fx + k.fy),
+            sigma: scale_params.sigma,
+            params: *params,
+        }
+    }
+
+    /// w_proj E_proj of piece `i` in state `piece`.
+    fn unary(&self, i: usize, piece: &Piece) -> f64 {
+        let samples = &self.samples[i];
+        if samples.is_empty() {
+            return 0.0;
+        }
+        let cap = self.params.cap_px;
+        let m = piece.m / piece.lambda;
+        let t = piece.t_hat * piece.lambda;
+        let sum: f64 = samples
+            .iter()
+            .map(|c| {
+                let p = piece.r * c.x1 + t * m.dot(&c.x1);
+                if p.z <= 1e-12 || m.dot(&c.x1) <= 0.0 {
+                    return cap;
+                }
+                let e = (p.x / p.z - c.x2.x).hypot(p.y / p.z - c.x2.y) * self.focal;
+                e.min(cap)
+            })
+            .sum();
+        self.params.proj_weight * sum / samples.len() as f64
+    }
+
+    /// E_cont between two states given their log-depths on the contact's rays.
+    fn pairwise(&self, weights: &[f64], da: &[[f64; 2]], db: &[[f64; 2]]) -> f64 {
+        let s = self.sigma;
+        weights
+            .iter()
+            .zip(da.iter().zip(db))
+            .map(|(w, (a, b))| {
+                let g1 = (a[0] - b[0]).abs();
+                let g2 = (a[1] - b[1]).abs();
+                // NaN (behind a camera) fails `<` and pays σ.
+                w * ((if g1 < s { g1 } else { s }) + (if g2 < s { g2 } else { s }))
+            })
+            .sum()
+    }
+
+    /// E of the soup's current states.
+    pub fn energy(&self, soup: &Soup) -> f64 {
+        let unary: f64 = soup
+            .pieces
+            .iter()
+            .enumerate()
+            .map(|(i, p)| self.unary(i, p))
+            .sum();
+        let pairwise: f64 = self
+            .contacts
+            .iter()
+            .map(|c| {
+                self.pairwise(
+                    &c.weights,
+                    &log_depths(&soup.pieces[c.a], &c.rays),
+                    &log_depths(&soup.pieces[c.b], &c.rays),
+                )
+            })
+            .sum();
+        unary + pairwise
+    }
+}
+
+/// Refines `soup` in place and reports the energies.
+pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
+    let params = problem.params;
+    let mut energies = vec![problem.energy(soup)];
+    let mut lower_bounds = Vec::new();
+    let mut rng = Rng::new(params.seed);
+    for iteration in 0..params.iterations {
+        let shrink = 0.5f64.powi(iteration as i32);
+        let particles: Vec<Vec<Piece>> = (0..soup.pieces.len())
+            .map(|i| draw_particles(soup, problem, i, shrink, &mut rng))
+            .collect();
+        let unary: Vec<Vec<f64>> = particles
+            .iter()
+            .enumerate()
+            .map(|(i, ps)| ps.iter().map(|p| problem.unary(i, p)).collect())
+            .collect();
+        let mut mrf = Mrf::new(unary);
+        for c in &problem.contacts {
+            let da: Vec<Vec<[f64; 2]>> = particles[c.a]
+                .iter()
+                .map(|p| log_depths(p, &c.rays))
+                .collect();
+            let db: Vec<Vec<[f64; 2]>> = particles[c.b]
+                .iter()
+                .map(|p| log_depths(p, &c.rays))
+                .collect();
+            let mut table = Vec::with_capacity(da.len() * db.len());
+            for a in &da {
+                for b in &db {
+                    table.push(problem.pairwise(&c.weights, a, b));
+                }
+            }
+            mrf.add_edge(c.a, c.b, table);
+        }
+        let current = vec![0; soup.pieces.len()];
+        let result = trws(
+            &mrf,
+            &TrwsOptions {
+                iterations: params.trws_passes,
+            },
+        );
+        lower_bounds.push(result.lower_bound);
+        let labels = if result.energy < mrf.energy(&current) {
+            result.labels
+        } else {
+            current
+        };
+        for (piece, (ps, &l)) in soup.pieces.iter_mut().zip(particles.iter().zip(&labels)) {
+            *piece = ps[l];
+        }
+        normalise_median_scale(soup);
+        energies.push(problem.energy(soup));
+    }
+    let tail_pieces = depth_tail_control(soup, problem);
+    RefineReport {
+        energies,
+        lower_bounds,
+        tail_pieces,
+    }
+}
+
+/// Pieces whose depth at the anchor or at a corner of their bounding box lies more than
+/// `max_depth_ratio` from the median anchor depth take the state of their touching piece
+/// nearest the median (repeated so clusters of such pieces are reached from their rim).
+/// Returns how many pieces changed.
+fn depth_tail_control(soup: &mut Soup, problem: &Problem) -> usize {
+    let limit = problem.params.max_depth_ratio.max(1.0).ln();
+    let anchor_depth =
+        |soup: &Soup, i: usize| soup.pieces[i].depth(&problem.extent_rays[i][0]).ln();
+    // The extreme log-depth of the piece (anchor and corners), NaN if any is not in front.
+    let log_depth = |soup: &Soup, i: usize, centre: f64| {
+        problem.extent_rays[i]
+            .iter()
+            .map(|r| soup.pieces[i].depth(r).ln())
+            .fold(anchor_depth(soup, i), |worst, v| {
+                if !v.is_finite() || !worst.is_finite() {
+                    f64::NAN
+                } else if (v - centre).abs() > (worst - centre).abs() {
+                    v
+                } else {
+                    worst
+                }
+            })
+    };
+    let mut logs: Vec<f64> = (0..soup.pieces.len())
+        .map(|i| anchor_depth(soup, i))
+        .filter(|v| v.is_finite())
+        .collect();
+    if logs.is_empty() {
+        return 0;
+    }
+    logs.sort_by(f64::total_cmp);
+    let centre = logs[logs.len() / 2];
+    let outside = |v: f64| !v.is_finite() || (v - centre).abs() > limit;
+    let mut changed = vec![false; soup.pieces.len()];
+    for _ in 0..soup.pieces.len() {
+        let mut moved = false;
+        #[allow(clippy::needless_range_loop)] // pieces are read through `soup` while one changes
+        for i in 0..soup.pieces.len() {
+            if !outside(log_depth(soup, i, centre)) {
+                continue;
+            }
+            let best = problem.neighbours[i]
+                .iter()
+                .map(|&k| (k, anchor_depth(soup, k)))
+                .filter(|&(_, v)| !outside(v))
+                .min_by(|a, b| (a.1 - centre).abs().total_cmp(&(b.1 - centre).abs()));
+            if let Some((k, _)) = best {
+                let degenerate = soup.pieces[i].degenerate;
+                soup.pieces[i] = Piece {
+                    degenerate,
+                    ..soup.pieces[k]
+                };
+                changed[i] = true;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    changed.iter().filter(|&&c| c).count()
+}
+
+/// Particles of piece `i`: its current state, its neighbours' states, then perturbations of
+/// its log-scale (spread `scale_spread · shrink`) and of its plane (relative spread
+/// `plane_spread · shrink`), up to `particles` in all.
+fn draw_particles(
+    soup: &Soup,
+    problem: &Problem,
+    i: usize,
+    shrink: f64,
+    rng: &mut Rng,
+) -> Vec<Piece> {
+    let params = &problem.params;
+    let current = soup.pieces[i];
+    let count = params.particles.max(1);
+    let mut out = vec![current];
+    for &k in &problem.neighbours[i] {
+        if out.len() >= count.div_ceil(2).max(1) {
+            break;
+        }
+        let mut p = soup.pieces[k];
+        p.degenerate = current.degenerate;
+        if !out.iter().any(|q| same_state(q, &p)) {
+            out.push(p);
+        }
+    }
+    while out.len() < count {
+        let mut p = current;
+        p.lambda *= (params.scale_spread * shrink * rng.normal()).exp();
+        if out.len() % 2 == 0 {
+            let n = p.m.norm();
+            let d = Vector3::new(rng.normal(), rng.normal(), rng.normal());
+            p.m += d * (params.plane_spread * shrink * n);
+        }
+        out.push(p);
+    }
+    out
+}
+
+fn same_state(a: &Piece, b: &Piece) -> bool {
+    a.lambda == b.lambda && a.m == b.m && a.r == b.r && a.t_hat == b.t_hat
+}
+
+/// Divides every λ by the median λ (the energy does not see a global scale).
+fn normalise_median_scale(soup: &mut Soup) {
+    let mut l: Vec<f64> = soup.pieces.iter().map(|p| p.lambda).collect();
+    l.sort_by(f64::total_cmp);
+    let median = l.get(l.len() / 2).copied().unwrap_or(1.0);
+    if median > 0.0 && median.is_finite() {
+        soup.pieces.iter_mut().for_each(|p| p.lambda /= median);
+    }
+}

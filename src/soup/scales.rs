@@ -1,0 +1,660 @@
+//! Relative scales, one per superpixel: the "3D jigsaw puzzle" of the paper (section 4), with
+//! an energy built so that its minimum sits at the true scales.
+//!
+//! Each piece i of the unit-scale soup is known up to its scale λ_i = e^(s_i): its depths, and
+//! the length of its translation, grow together, so its fit to the flow does not change. What
+//! ties the scales together is *contact*: where two pieces touch, their surfaces meet, in frame
+//! 1 and in frame 2, unless there is a real depth edge.
+//!
+//! # The contact term, in log-depth
+//! For a boundary pixel pair (p in a, q in b), both planes are evaluated on the ray r through the
+//! midpoint of p and q. Piece a's depth there is z_a = λ_a z̄_a(r) with z̄_a(r) = 1 / (m_a · r) its
+//! unit-scale depth, so the frame-1 log-depth gap is
+//!
+//!   g₁ = ln z_a − ln z_b = (s_a − s_b) + (ln z̄_a(r) − ln z̄_b(r)) = δ + c₁.
+//!
+//! In frame 2 each plane has moved with its own motion: at unit scale piece a's plane becomes
+//! m'_a = R_a m_a / (1 + m_a · R_aᵀ t̂_a) (from X' = R X + t̂ and mᵀX = 1), and the two pieces'
+//! transfers of r (scale-free: projection ignores λ) give a midpoint ray r' in camera 2, where
+//! the gap is g₂ = δ + c₂ with c₂ = ln z̄'_a(r') − ln z̄'_b(r'). Measuring along one ray makes the
+//! frame-2 term tolerant of sliding contact (a foot on the floor moves along the floor: its point
+//! stays *on the floor's plane* though it left the floor point it touched).
+//!
+//! Both gaps are scale-free (a global scale cancels in δ), so one truncation σ serves every
+//! scene: ρ(g) = min(|g|, σ), and a real depth edge costs at most σ per pair. A pair's weight
+//! is [`pair_weight`]: low where the colour jumps or the flow check failed (occlusions), and
+//! every touching pair of pieces carries the same total weight whatever its boundary length.
+//!
+//! # The solve
+//! 1. *Rigid segments.* Touching pieces that use the same motion hypothesis and whose planes
+//!    meet at equal scale (median |c₁| below `segment_gap`) are one rigid body with one scale;
+//!    union-find over such pairs gives the segments. (One scale per *hypothesis* is wrong on
+//!    dynamic scenes: several walkers can share one motion up to scale.)
+//! 2. *Segment scales* by coordinate descent on E from two starts (a maximum spanning tree of
+//!    the sharpest links, and every segment at median depth 1), each segment moving to the exact
+//!    minimum of its terms (for truncated-linear terms it lies at one of the zero-gap points −c),
+//!    within a band of depth ratios around the largest segment. The lower energy wins.
+//! 3. *Tail control.* A piece whose depth disagrees with every neighbour in both frames while
+//!    the flow across its boundary is continuous (nothing in the data justifies the depth edge)
+//!    takes the scale that best meets its neighbours. The number of such pieces is reported.
+//!
+//! E is [`Problem::energy`]; `soup eval --oracle` compares it at the solution and at the ground
+//! truth polished by the same per-piece descent (the "truth test").
+
+use nalgebra::Vector3;
+use serde::Serialize;
+
+use super::{Piece, Soup};
+use crate::camera::Intrinsics;
+use crate::flow::FlowField;
+use crate::grid::Grid;
+use crate::superpixels::Superpixels;
+use crate::superpixels::graph::BoundaryGraph;
+
+/// Settings of the scale solve. Each value is scale-free and shared by every scene.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+pub struct ScaleParams {
+    /// σ: truncation of a pair's log-depth gap. A real depth edge costs at most this per pair;
+    /// 0.1 is a 10 % depth jump, well above the gap that flow noise leaves between planes that
+    /// really meet (about 0.01–0.03) and below typical object-to-background jumps.
+    pub sigma: f64,
+    /// Touching pieces of one motion hypothesis whose planes meet within this median log-depth
+    /// gap at equal scale are one rigid segment (0.05: the gap noise of fitted planes).
+    pub segment_gap: f64,
+    /// Colour difference (RGB in [0, 1], Euclidean) at which a pair's weight falls to 1/e:
+    /// contacts between pieces of one colour are likelier than across a colour edge.
+    pub colour_scale: f64,
+    /// Weight of a pair where either pixel failed the forward–backward check (an occlusion is
+    /// likely there, so the two sides need not meet).
+    pub occluded_weight: f64,
+    /// Each segment's median depth stays within [1/band, band] times the largest segment's.
+    pub band: f64,
+    /// At most this many pixel pairs are used per touching pair of pieces (evenly spaced).
+    pub pairs_per_boundary: usize,
+    /// Contact evidence of a pair (see [`contact_evidence`]): flow jump (px) at which the
+    /// flow-continuity evidence falls to 1/e.
+    pub flow_scale_px: f64,
+    /// Smallest contact evidence of a pair (a pair of parallel planes whose flow jumps).
+    pub evidence_floor: f64,
+    /// Flow jump (px) across a boundary below which the flow counts as continuous there
+    /// (tail control: a depth edge needs a flow edge to be believed).
+    pub continuous_flow_px: f64,
+}
+
+impl Default for ScaleParams {
+    fn default() -> Self {
+        ScaleParams {
+            sigma: 0.1,
+            segment_gap: 0.05,
+            colour_scale: 0.15,
+            occluded_weight: 0.3,
+            band: 12.0,
+            pairs_per_boundary: 12,
+            continuous_flow_px: 1.0,
+            flow_scale_px: 0.5,
+            evidence_floor: 0.2,
+        }
+    }
+}
+
+/// What the scale solve did.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct ScaleReport {
+    /// E with every piece at unit scale (λ = 1).
+    pub energy_start: f64,
+    /// E at the solution.
+    pub energy_end: f64,
+    /// Rigid segments (the unknowns of step 2).
+    pub segments: usize,
+    /// Coordinate-descent sweeps over segments.
+    pub sweeps: usize,
+    /// Pieces moved by tail control (step 3).
+    pub tail_pieces: usize,
+    /// Largest / smallest λ.
+    pub lambda_ratio: f64,
+}
+
+/// What the scale solve reads besides the soup, all at the working resolution.
+#[derive(Clone, Copy, Debug)]
+pub struct ScaleInputs<'a> {
+    /// The superpixels the soup's pieces are.
+    pub superpixels: &'a Superpixels,
+    /// The touching pixel pairs.
+    pub boundaries: &'a BoundaryGraph,
+    /// Flow 1→2 (continuity across boundaries).
+    pub flow: &'a FlowField,
+    /// Where that flow is trusted (forward–backward consistent).
+    pub reliable: &'a Grid<bool>,
+    pub intrinsics: &'a Intrinsics,
+}
+
+/// The contact terms between two touching pieces a < b, as functions of δ = s_a − s_b:
+/// φ(δ) = Σ_j w_j min(|δ + c_j|, σ) (frame-1 and frame-2 gaps of every pair used).
+#[derive(Clone, Debug)]
+pub struct Link {
+    pub a: usize,
+    pub b: usize,
+    /// (w, c) per gap.
+    pub terms: Vec<(f64, f64)>,
+    /// Median frame-1 offset c₁ (the log-depth gap at equal scales).
+    pub median_c1: f64,
+    /// Median flow jump across the boundary (px).
+    pub flow_jump: f64,
+}
+
+impl Link {
+    /// φ(δ).
+    pub fn value(&self, delta: f64, sigma: f64) -> f64 {
+        self.terms
+            .iter()
+            .map(|&(w, c)| w * (delta + c).abs().min(sigma))
+            .sum()
+    }
+}
+
+/// The scale problem: one [`Link`] per touching pair of pieces.
+#[derive(Clone, Debug)]
+pub struct Problem {
+    pub links: Vec<Link>,
+    /// Per piece, the indices of its links.
+    pub touching: Vec<Vec<usize>>,
+    pub sigma: f64,
+}
+
+impl Problem {
+    /// E at piece log-scales `s`.
+    pub fn energy(&self, s: &[f64]) -> f64 {
+        self.links
+            .iter()
+            .map(|l| l.value(s[l.a] - s[l.b], self.sigma))
+            .sum()
+    }
+
+    /// The terms of piece `i` as functions of its own log-scale, the others fixed at `s`:
+    /// (w, c) such that its local energy is Σ w min(|s_i + c|, σ).
+    fn local_terms(&self, i: usize, s: &[f64]) -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
+        for &e in &self.touching[i] {
+            let l = &self.links[e];
+            // δ = s_a − s_b; as a function of s_i: gap = ±(s_i − s_other) + c.
+            if l.a == i {
+                out.extend(l.terms.iter().map(|&(w, c)| (w, c - s[l.b])));
+            } else {
+                out.extend(l.terms.iter().map(|&(w, c)| (w, -c - s[l.a])));
+            }
+        }
+        out
+    }
+}
+
+/// Σ w min(|x + c|, σ).
+fn truncated(terms: &[(f64, f64)], x: f64, sigma: f64) -> f64 {
+    terms
+        .iter()
+        .map(|&(w, c)| w * (x + c).abs().min(sigma))
+        .sum()
+}
+
+/// The exact minimiser of Σ w min(|x + c|, σ) over x in [lo, hi] (the minimum of a sum of
+/// truncated absolute values lies at a kink −c or at a bound), preferring `current` on ties.
+fn minimise_truncated(terms: &[(f64, f64)], sigma: f64, current: f64, lo: f64, hi: f64) -> f64 {
+    let mut best = (truncated(terms, current, sigma), current);
+    for x in terms
+        .iter()
+        .map(|&(_, c)| -c)
+        .chain([lo, hi])
+        .filter(|x| (lo..=hi).contains(x))
+    {
+        let e = truncated(terms, x, sigma);
+        if e < best.0 - 1e-12 {
+            best = (e, x);
+        }
+    }
+    best.1
+}
+
+/// Builds the contact problem of `soup` (its pieces' planes and motions; scales are ignored).
+pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Problem {
+    let ScaleInputs {
+        superpixels: sp,
+        boundaries,
+        flow,
+        intrinsics: k,
+        ..
+    } = *inputs;
+    let unit = |p: &Piece| Piece { lambda: 1.0, ..*p };
+    let width = sp.labels.width();
+    let mut links = Vec::new();
+    for edge in boundaries.edges.iter().filter(|e| !e.pairs.is_empty()) {
+        let (a, b) = (edge.a as usize, edge.b as usize);
+        let (pa, pb) = (&soup.pieces[a], &soup.pieces[b]);
+        let step = edge.pairs.len().div_ceil(params.pairs_per_boundary.max(1));
+        let mut terms = Vec::new();
+        let mut c1s = Vec::new();
+        let mut jumps = Vec::new();
+        for (j, &(p, q)) in edge.pairs.iter().enumerate() {
+            let (fp, fq) = (flow.data()[p as usize], flow.data()[q as usize]);
+            jumps.push(((fp[0] - fq[0]) as f64).hypot((fp[1] - fq[1]) as f64));
+            if j % step != 0 {
+                continue;
+            }
+            let r = midpoint_ray(p, q, width, k);
+            let (za, zb) = (log_depths(&unit(pa), &r), log_depths(&unit(pb), &r));
+            let w = pair_weight(soup, inputs, params, edge, j);
+            // Gap in frame f at log-scales s: (s_a − s_b) + (ln z̄_a − ln z̄_b).
+            for f in 0..2 {
+                let c = za[f] - zb[f];
+                if c.is_finite() {
+                    terms.push((w, c));
+                    if f == 0 {
+                        c1s.push(c);
+                    }
+                }
+            }
+        }
+        if terms.is_empty() {
+            continue;
+        }
+        // Every touching pair carries total weight (its gaps' share) independent of its length.
+        let total: f64 = terms.len() as f64;
+        terms.iter_mut().for_each(|t| t.0 /= total);
+        jumps.sort_by(f64::total_cmp);
+        c1s.sort_by(f64::total_cmp);
+        links.push(Link {
+            a,
+            b,
+            terms,
+            median_c1: c1s.get(c1s.len() / 2).copied().unwrap_or(f64::NAN),
+            flow_jump: jumps[jumps.len() / 2],
+        });
+    }
+    let mut touching = vec![Vec::new(); soup.pieces.len()];
+    for (e, l) in links.iter().enumerate() {
+        touching[l.a].push(e);
+        touching[l.b].push(e);
+    }
+    Problem {
+        links,
+        touching,
+        sigma: params.sigma,
+    }
+}
+
+/// Rigid segments: union-find over touching pieces of one hypothesis whose planes meet at equal
+/// scale. Returns the segment of every piece (0-based, dense) and the segments' sizes.
+pub fn rigid_segments(soup: &Soup, problem: &Problem, gap: f64) -> (Vec<usize>, Vec<usize>) {
+    let n = soup.pieces.len();
+    let mut parent: Vec<usize> = (0..n).collect();
+    fn find(parent: &mut [usize], mut x: usize) -> usize {
+        while parent[x] != x {
+            parent[x] = parent[parent[x]];
+            x = parent[x];
+        }
+        x
+    }
+    for l in &problem.links {
+        if soup.pieces[l.a].hypothesis == soup.pieces[l.b].hypothesis && l.median_c1.abs() < gap {
+            let (ra, rb) = (find(&mut parent, l.a), find(&mut parent, l.b));
+            if ra != rb {
+                parent[ra.max(rb)] = ra.min(rb);
+            }
+        }
+    }
+    let mut index = vec![usize::MAX; n];
+    let mut sizes = Vec::new();
+    let segment = (0..n)
+        .map(|i| {
+            let r = find(&mut parent, i);
+            if index[r] == usize::MAX {
+                index[r] = sizes.len();
+                sizes.push(0);
+            }
+            sizes[index[r]] += 1;
+            index[r]
+        })
+        .collect();
+    (segment, sizes)
+}
+
+/// Solves the relative scales of `soup` in place (median λ = 1 over pieces) and reports.
+pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams) -> ScaleReport {
+    let problem = build_problem(soup, inputs, params);
+    let n = soup.pieces.len();
+    let zero = vec![0.0; n];
+    let energy_start = problem.energy(&zero);
+    let (segment, sizes) = rigid_segments(soup, &problem, params.segment_gap);
+    let centre = segment_centres(soup, inputs, &segment, sizes.len());
+    let (u, sweeps) = solve_segments(&problem, &segment, &sizes, &centre, params);
+    let mut s: Vec<f64> = segment.iter().map(|&g| u[g] + centre[g]).collect();
+    let tail_pieces = tail_control(&problem, &mut s, params);
+    let energy_end = problem.energy(&s);
+    set_scales(soup, &s);
+    let (lo, hi) = soup
+        .pieces
+        .iter()
+        .fold((f64::INFINITY, 0.0f64), |(a, b), p| {
+            (a.min(p.lambda), b.max(p.lambda))
+        });
+    ScaleReport {
+        energy_start,
+        energy_end,
+        segments: sizes.len(),
+        sweeps,
+        tail_pieces,
+        lambda_ratio: if n > 0 { hi / lo } else { 1.0 },
+    }
+}
+
+/// Sets every piece's λ = e^(s_i), normalised so the median λ is 1.
+pub fn set_scales(soup: &mut Soup, s: &[f64]) {
+    let mut sorted: Vec<f64> = s.iter().copied().filter(|v| v.is_finite()).collect();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
+    for (p, &v) in soup.pieces.iter_mut().zip(s) {
+        p.lambda = if v.is_finite() {
+            (v - median).exp()
+        } else {
+            1.0
+        };
+    }
+}
+
+/// Per segment, −median ln z̄ of its pieces' unit-scale anchor depths (0 without one): the
+/// log-scale that puts the segment at median depth 1. Unit-scale depths of different motions
+/// can differ by orders of magnitude, so scales are searched around these centres.
+fn segment_centres(soup: &Soup, inputs: &ScaleInputs, segment: &[usize], count: usize) -> Vec<f64> {
+    let mut logs = vec![Vec::new(); count];
+    for ((piece, seg), &g) in soup
+        .pieces
+        .iter()
+        .zip(&inputs.superpixels.segments)
+        .zip(segment)
+    {
+        let z = piece.depth(&Vector3::from(
+            inputs.intrinsics.ray(seg.anchor[0], seg.anchor[1]),
+        )) / piece.lambda;
+        if z.is_finite() && z > 0.0 {
+            logs[g].push(z.ln());
+        }
+    }
+    logs.into_iter()
+        .map(|mut v| {
+            if v.is_empty() {
+                return 0.0;
+            }
+            v.sort_by(f64::total_cmp);
+            -v[v.len() / 2]
+        })
+        .collect()
+}
+
+/// Coordinate descent over segment offsets u (log-scale s = centre + u), from two starts;
+/// returns the better u and the sweeps run.
+fn solve_segments(
+    problem: &Problem,
+    segment: &[usize],
+    sizes: &[usize],
+    centre: &[f64],
+    params: &ScaleParams,
+) -> (Vec<f64>, usize) {
+    let count = sizes.len();
+    let reference = (0..count).max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
+    let band = params.band.max(1.0).ln();
+    // Links between segments, with their terms re-expressed in u: gap = ±(u_g − u_h) + c'.
+    let mut between: Vec<Vec<usize>> = vec![Vec::new(); count];
+    for (e, l) in problem.links.iter().enumerate() {
+        let (ga, gb) = (segment[l.a], segment[l.b]);
+        if ga != gb {
+            between[ga].push(e);
+            between[gb].push(e);
+        }
+    }
+    let energy = |u: &[f64]| {
+        let s: Vec<f64> = segment.iter().map(|&g| u[g] + centre[g]).collect();
+        problem.energy(&s)
+    };
+    let seg_terms = |g: usize, u: &[f64]| -> Vec<(f64, f64)> {
+        let mut out = Vec::new();
+        for &e in &between[g] {
+            let l = &problem.links[e];
+            let (ga, gb) = (segment[l.a], segment[l.b]);
+            // δ = s_a − s_b with s = centre + u.
+            if ga == g {
+                let other = u[gb] + centre[gb] - centre[g];
+                out.extend(l.terms.iter().map(|&(w, c)| (w, c - other)));
+            } else {
+                let other = u[ga] + centre[ga] - centre[g];
+                out.extend(l.terms.iter().map(|&(w, c)| (w, -c - other)));
+            }
+        }
+        out
+    };
+    let starts = [
+        spanning_tree_start(problem, segment, centre, count, reference, band),
+        vec![0.0; count],
+    ];
+    let mut best: Option<(f64, Vec<f64>)> = None;
+    let mut sweeps = 0;
+    for start in starts {
+        let mut u = start;
+        for _ in 0..30 {
+            sweeps += 1;
+            let mut moved = false;
+            for g in 0..count {
+                if Some(g) == reference || between[g].is_empty() {
+                    continue;
+                }
+                let r = reference.map_or(0.0, |r| u[r]);
+                let terms = seg_terms(g, &u);
+                let x = minimise_truncated(&terms, problem.sigma, u[g], r - band, r + band);
+                if (x - u[g]).abs() > 1e-9 {
+                    moved = true;
+                    u[g] = x;
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        let e = energy(&u);
+        if best.as_ref().is_none_or(|(b, _)| e < *b) {
+            best = Some((e, u));
+        }
+    }
+    (
+        best.map(|b| b.1).unwrap_or_else(|| vec![0.0; count]),
+        sweeps,
+    )
+}
+
+/// Start: a maximum spanning tree over segment pairs by how much their links weigh, walked from
+/// the reference segment; each segment takes the offset that best meets its tree parent.
+fn spanning_tree_start(
+    problem: &Problem,
+    segment: &[usize],
+    centre: &[f64],
+    count: usize,
+    reference: Option<usize>,
+    band: f64,
+) -> Vec<f64> {
+    let mut u = vec![0.0; count];
+    let Some(root) = reference else { return u };
+    // Per segment pair (g < h): all terms as functions of u_g − u_h.
+    let mut pairs: std::collections::BTreeMap<(usize, usize), Vec<(f64, f64)>> = Default::default();
+    for l in &problem.links {
+        let (ga, gb) = (segment[l.a], segment[l.b]);
+        if ga == gb {
+            continue;
+        }
+        // δ = (centre_a + u_a) − (centre_b + u_b).
+        let off = centre[ga] - centre[gb];
+        let (key, sign) = if ga < gb {
+            ((ga, gb), 1.0)
+        } else {
+            ((gb, ga), -1.0)
+        };
+        pairs
+            .entry(key)
+            .or_default()
+            .extend(l.terms.iter().map(|&(w, c)| (w, sign * (c + off))));
+    }
+    let mut edges: Vec<((usize, usize), f64, f64)> = pairs
+        .into_iter()
+        .map(|(key, terms)| {
+            let weight: f64 = terms.iter().map(|t| t.0).sum();
+            // Best d = u_g − u_h: the sum is Σ w min(|d + c|, σ).
+            let d = minimise_truncated(&terms, problem.sigma, 0.0, -2.0 * band, 2.0 * band);
+            (key, weight, d)
+        })
+        .collect();
+    edges.sort_by(|x, y| y.1.total_cmp(&x.1).then(x.0.cmp(&y.0)));
+    let mut placed = vec![false; count];
+    placed[root] = true;
+    while let Some(&((g, h), _, d)) = edges.iter().find(|e| placed[e.0.0] != placed[e.0.1]) {
+        if placed[g] {
+            u[h] = (u[g] - d).clamp(-band, band);
+            placed[h] = true;
+        } else {
+            u[g] = (u[h] + d).clamp(-band, band);
+            placed[g] = true;
+        }
+    }
+    u
+}
+
+/// Tail control: pieces whose depth disagrees with every touching neighbour in both frames
+/// (each link's cost within 10 % of its fully truncated value) while the flow is continuous
+/// across some boundary of theirs move to the scale that best meets their neighbours.
+/// Returns how many moved.
+fn tail_control(problem: &Problem, s: &mut [f64], params: &ScaleParams) -> usize {
+    let sigma = problem.sigma;
+    let mut moved = 0;
+    for i in 0..s.len() {
+        let links = &problem.touching[i];
+        if links.is_empty() {
+            continue;
+        }
+        let disagrees = links.iter().all(|&e| {
+            let l = &problem.links[e];
+            let full: f64 = l.terms.iter().map(|t| t.0 * sigma).sum();
+            l.value(s[l.a] - s[l.b], sigma) >= 0.9 * full
+        });
+        let continuous = links
+            .iter()
+            .any(|&e| problem.links[e].flow_jump < params.continuous_flow_px);
+        if disagrees && continuous {
+            let terms = problem.local_terms(i, s);
+            let x = minimise_truncated(&terms, sigma, s[i], f64::NEG_INFINITY, f64::INFINITY);
+            if (x - s[i]).abs() > 1e-9 {
+                s[i] = x;
+                moved += 1;
+            }
+        }
+    }
+    moved
+}
+
+/// Per-piece coordinate descent on E from `s` (each piece in turn to the exact minimum of its
+/// own terms) until nothing moves or `sweeps` pass: the polisher of the truth test.
+pub fn polish(problem: &Problem, s: &mut [f64], sweeps: usize) {
+    for _ in 0..sweeps {
+        let mut moved = false;
+        for i in 0..s.len() {
+            if problem.touching[i].is_empty() {
+                continue;
+            }
+            let terms = problem.local_terms(i, s);
+            let x = minimise_truncated(
+                &terms,
+                problem.sigma,
+                s[i],
+                f64::NEG_INFINITY,
+                f64::INFINITY,
+            );
+            if (x - s[i]).abs() > 1e-9 {
+                s[i] = x;
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+}
+
+/// How much a boundary pixel pair (p, q) between two pieces says that they touch, in
+/// [evidence_floor, 1]: the larger of
+/// - the sine of the angle between their planes: planes at an angle meet only along their line
+///   of intersection, so a boundary that matches there is not an accident (feet on the floor);
+/// - the continuity of the flow across the pair, exp(−‖f(p) − f(q)‖ / flow_scale_px): a surface
+///   that really continues (a waving flag) moves continuously.
+///
+/// What is left weak is a pair of nearly parallel planes whose flow jumps: an occlusion (one
+/// person in front of another), which scaling one plane onto the other would fake as a contact.
+fn contact_evidence(
+    m_a: &Vector3<f64>,
+    m_b: &Vector3<f64>,
+    f_p: [f32; 2],
+    f_q: [f32; 2],
+    params: &ScaleParams,
+) -> f64 {
+    let sin = m_a.normalize().cross(&m_b.normalize()).norm();
+    let jump = ((f_p[0] - f_q[0]) as f64).hypot((f_p[1] - f_q[1]) as f64);
+    let continuity = (-jump / params.flow_scale_px).exp();
+    let e = sin.max(continuity);
+    if e.is_finite() {
+        e.max(params.evidence_floor)
+    } else {
+        1.0
+    }
+}
+
+/// The ray (normalised, z = 1) through the midpoint of boundary pixels `p` and `q`
+/// (indices y · width + x).
+pub fn midpoint_ray(p: u32, q: u32, width: usize, k: &Intrinsics) -> Vector3<f64> {
+    let (p, q) = (p as usize, q as usize);
+    let mid = [
+        (p % width + q % width) as f64 * 0.5,
+        (p / width + q / width) as f64 * 0.5,
+    ];
+    Vector3::from(k.ray(mid[0], mid[1]))
+}
+
+/// ln z of `piece` (at its scale λ) on `ray`, in frame 1 (its plane's depth) and in frame 2
+/// (the camera-2 depth of that point moved by R X + λ t̂); NaN where either is not in front.
+pub fn log_depths(piece: &Piece, ray: &Vector3<f64>) -> [f64; 2] {
+    let inv = piece.m.dot(ray);
+    if !(inv > 0.0 && piece.lambda > 0.0) {
+        return [f64::NAN; 2];
+    }
+    let x = ray * (piece.lambda / inv);
+    let z2 = (piece.r * x + piece.t_hat * piece.lambda).z;
+    if z2 > 0.0 {
+        [x.z.ln(), z2.ln()]
+    } else {
+        [x.z.ln(), f64::NAN]
+    }
+}
+
+/// The weight of boundary pair `j` of `edge`: colour similarity exp(−‖ΔI‖ / colour_scale)
+/// times the [`contact_evidence`] of the two pieces' planes and flow there, times
+/// `occluded_weight` where either pixel failed the forward–backward check.
+pub fn pair_weight(
+    soup: &Soup,
+    inputs: &ScaleInputs,
+    params: &ScaleParams,
+    edge: &crate::superpixels::graph::BoundaryEdge,
+    j: usize,
+) -> f64 {
+    let (p, q) = edge.pairs[j];
+    let (p, q) = (p as usize, q as usize);
+    let flow = inputs.flow.data();
+    let reliable = inputs.reliable.data();
+    let (pa, pb) = (&soup.pieces[edge.a as usize], &soup.pieces[edge.b as usize]);
+    let mut w = (-(edge.colour_diff[j] as f64) / params.colour_scale).exp()
+        * contact_evidence(&pa.m, &pb.m, flow[p], flow[q], params);
+    if !(reliable[p] && reliable[q]) {
+        w *= params.occluded_weight;
+    }
+    w
+}
