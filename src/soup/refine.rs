@@ -25,7 +25,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
-use super::scales::{self, ScaleInputs, ScaleParams, midpoint_ray, pair_weight};
+use super::scales::{self, RayPoint, ScaleInputs, ScaleParams, midpoint_ray, pair_weight};
 use super::{Piece, Soup};
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
 use crate::rng::Rng;
@@ -115,15 +115,16 @@ pub struct Problem {
     /// Normalised rays through each piece's anchor and the corners of its bounding box.
     extent_rays: Vec<[Vector3<f64>; 5]>,
     contacts: Vec<Contact>,
-    neighbours: Vec<Vec<usize>>,
+    /// Per piece, its touching pieces and the index of the contact with each.
+    neighbours: Vec<Vec<(usize, usize)>>,
     focal: f64,
     sigma: f64,
     params: RefineParams,
 }
 
-/// Log-depths of a state on a contact's rays, in frame 1 and frame 2 (NaN where behind a camera).
-fn log_depths(piece: &Piece, rays: &[Vector3<f64>]) -> Vec<[f64; 2]> {
-    rays.iter().map(|r| scales::log_depths(piece, r)).collect()
+/// Where a state meets each of a contact's rays (`None` where behind a camera).
+fn ray_points(piece: &Piece, rays: &[Vector3<f64>]) -> Vec<Option<RayPoint>> {
+    rays.iter().map(|r| scales::ray_point(piece, r)).collect()
 }
 
 impl Problem {
@@ -179,8 +180,8 @@ impl Problem {
             }
             let total = weights.len() as f64;
             weights.iter_mut().for_each(|w| *w /= total);
-            neighbours[a].push(b);
-            neighbours[b].push(a);
+            neighbours[a].push((b, contacts.len()));
+            neighbours[b].push((a, contacts.len()));
             contacts.push(Contact {
                 a,
                 b,
@@ -213,6 +214,18 @@ impl Problem {
         }
     }
 
+    /// The median frame-1 depth of `state` on the rays of contact `c` (NaN without one).
+    fn boundary_depth(&self, state: &Piece, c: usize) -> f64 {
+        let mut z: Vec<f64> = self.contacts[c]
+            .rays
+            .iter()
+            .map(|r| state.depth(r))
+            .filter(|z| z.is_finite() && *z > 0.0)
+            .collect();
+        z.sort_by(f64::total_cmp);
+        z.get(z.len() / 2).copied().unwrap_or(f64::NAN)
+    }
+
     /// w_proj E_proj of piece `i` in state `piece`.
     fn unary(&self, i: usize, piece: &Piece) -> f64 {
         let samples = &self.samples[i];
@@ -236,17 +249,19 @@ impl Problem {
         self.params.proj_weight * sum / samples.len() as f64
     }
 
-    /// E_cont between two states given their log-depths on the contact's rays.
-    fn pairwise(&self, weights: &[f64], da: &[[f64; 2]], db: &[[f64; 2]]) -> f64 {
+    /// E_cont between two states given where they meet the contact's rays.
+    fn pairwise(&self, weights: &[f64], da: &[Option<RayPoint>], db: &[Option<RayPoint>]) -> f64 {
         let s = self.sigma;
         weights
             .iter()
             .zip(da.iter().zip(db))
-            .map(|(w, (a, b))| {
-                let g1 = (a[0] - b[0]).abs();
-                let g2 = (a[1] - b[1]).abs();
-                // NaN (behind a camera) fails `<` and pays σ.
-                w * ((if g1 < s { g1 } else { s }) + (if g2 < s { g2 } else { s }))
+            .map(|(w, pair)| match pair {
+                (Some(a), Some(b)) => {
+                    let [g1, g2] = scales::gaps(a, b).map(f64::abs);
+                    // NaN (behind a camera) fails `<` and pays σ.
+                    w * ((if g1 < s { g1 } else { s }) + (if g2 < s { g2 } else { s }))
+                }
+                _ => w * 2.0 * s,
             })
             .sum()
     }
@@ -265,8 +280,8 @@ impl Problem {
             .map(|c| {
                 self.pairwise(
                     &c.weights,
-                    &log_depths(&soup.pieces[c.a], &c.rays),
-                    &log_depths(&soup.pieces[c.b], &c.rays),
+                    &ray_points(&soup.pieces[c.a], &c.rays),
+                    &ray_points(&soup.pieces[c.b], &c.rays),
                 )
             })
             .sum();
@@ -292,13 +307,13 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
             .collect();
         let mut mrf = Mrf::new(unary);
         for c in &problem.contacts {
-            let da: Vec<Vec<[f64; 2]>> = particles[c.a]
+            let da: Vec<Vec<Option<RayPoint>>> = particles[c.a]
                 .iter()
-                .map(|p| log_depths(p, &c.rays))
+                .map(|p| ray_points(p, &c.rays))
                 .collect();
-            let db: Vec<Vec<[f64; 2]>> = particles[c.b]
+            let db: Vec<Vec<Option<RayPoint>>> = particles[c.b]
                 .iter()
-                .map(|p| log_depths(p, &c.rays))
+                .map(|p| ray_points(p, &c.rays))
                 .collect();
             let mut table = Vec::with_capacity(da.len() * db.len());
             for a in &da {
@@ -378,14 +393,15 @@ fn depth_tail_control(soup: &mut Soup, problem: &Problem) -> usize {
             }
             let best = problem.neighbours[i]
                 .iter()
-                .map(|&k| (k, anchor_depth(soup, k)))
-                .filter(|&(_, v)| !outside(v))
-                .min_by(|a, b| (a.1 - centre).abs().total_cmp(&(b.1 - centre).abs()));
-            if let Some((k, _)) = best {
+                .map(|&(k, c)| (k, c, anchor_depth(soup, k)))
+                .filter(|&(_, _, v)| !outside(v))
+                .min_by(|a, b| (a.2 - centre).abs().total_cmp(&(b.2 - centre).abs()));
+            if let Some((k, c, _)) = best {
                 let degenerate = soup.pieces[i].degenerate;
+                let z = problem.boundary_depth(&soup.pieces[k], c);
                 soup.pieces[i] = Piece {
                     degenerate,
-                    ..soup.pieces[k]
+                    ..flattened(&soup.pieces[k], z)
                 };
                 changed[i] = true;
                 moved = true;
@@ -412,14 +428,24 @@ fn draw_particles(
     let current = soup.pieces[i];
     let count = params.particles.max(1);
     let mut out = vec![current];
-    for &k in &problem.neighbours[i] {
+    // A piece without flow of its own also gets each neighbour's motion with a plane facing the
+    // camera at the neighbour's depth on their shared boundary: extending a neighbour's tilted
+    // plane across a whole superpixel can throw it arbitrarily far.
+    let flat = problem.samples[i].is_empty();
+    for &(k, c) in &problem.neighbours[i] {
         if out.len() >= count.div_ceil(2).max(1) {
             break;
         }
-        let mut p = soup.pieces[k];
-        p.degenerate = current.degenerate;
-        if !out.iter().any(|q| same_state(q, &p)) {
-            out.push(p);
+        let neighbour = soup.pieces[k];
+        let mut candidates = vec![neighbour];
+        if flat {
+            candidates.push(flattened(&neighbour, problem.boundary_depth(&neighbour, c)));
+        }
+        for mut p in candidates {
+            p.degenerate = current.degenerate;
+            if p.lambda.is_finite() && !out.iter().any(|q| same_state(q, &p)) {
+                out.push(p);
+            }
         }
     }
     while out.len() < count {
@@ -433,6 +459,14 @@ fn draw_particles(
         out.push(p);
     }
     out
+}
+
+/// `state`'s motion and scale with a plane facing the camera (normal along z) at depth `z`.
+fn flattened(state: &Piece, z: f64) -> Piece {
+    Piece {
+        m: Vector3::new(0.0, 0.0, state.lambda / z),
+        ..*state
+    }
 }
 
 fn same_state(a: &Piece, b: &Piece) -> bool {

@@ -239,11 +239,12 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
                 continue;
             }
             let r = midpoint_ray(p, q, width, k);
-            let (za, zb) = (log_depths(&unit(pa), &r), log_depths(&unit(pb), &r));
+            let (Some(ra), Some(rb)) = (ray_point(&unit(pa), &r), ray_point(&unit(pb), &r)) else {
+                continue;
+            };
             let w = pair_weight(soup, inputs, params, edge, j);
-            // Gap in frame f at log-scales s: (s_a − s_b) + (ln z̄_a − ln z̄_b).
-            for f in 0..2 {
-                let c = za[f] - zb[f];
+            // The gap in each frame at log-scales s is (s_a − s_b) + (its value at unit scale).
+            for (f, c) in gaps(&ra, &rb).into_iter().enumerate() {
                 if c.is_finite() {
                     terms.push((w, c));
                     if f == 0 {
@@ -620,20 +621,51 @@ pub fn midpoint_ray(p: u32, q: u32, width: usize, k: &Intrinsics) -> Vector3<f64
     Vector3::from(k.ray(mid[0], mid[1]))
 }
 
-/// ln z of `piece` (at its scale λ) on `ray`, in frame 1 (its plane's depth) and in frame 2
-/// (the camera-2 depth of that point moved by R X + λ t̂); NaN where either is not in front.
-pub fn log_depths(piece: &Piece, ray: &Vector3<f64>) -> [f64; 2] {
+/// A piece's surface where a boundary ray meets it, in both frames (camera-1 and camera-2
+/// coordinates, at the piece's scale λ): what the contact gaps compare.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RayPoint {
+    /// ln of the frame-1 depth of the plane on the ray.
+    pub log_depth: f64,
+    /// That point moved into camera 2: X' = R X + λ t̂.
+    pub moved: Vector3<f64>,
+    /// The piece's plane in camera 2, m'ᵀX' = 1: m' = R m / (λ (1 + mᵀRᵀt̂)) with m the
+    /// unit-scale plane (from X = Rᵀ(X' − λ t̂) and mᵀX = λ).
+    pub plane2: Vector3<f64>,
+}
+
+/// Where `ray` meets `piece` (see [`RayPoint`]); `None` when the point or the plane is behind
+/// either camera.
+pub fn ray_point(piece: &Piece, ray: &Vector3<f64>) -> Option<RayPoint> {
     let inv = piece.m.dot(ray);
-    if !(inv > 0.0 && piece.lambda > 0.0) {
-        return [f64::NAN; 2];
+    let d = 1.0 + piece.m.dot(&(piece.r.transpose() * piece.t_hat));
+    if !(inv > 0.0 && piece.lambda > 0.0 && d > 0.0) {
+        return None;
     }
     let x = ray * (piece.lambda / inv);
-    let z2 = (piece.r * x + piece.t_hat * piece.lambda).z;
-    if z2 > 0.0 {
-        [x.z.ln(), z2.ln()]
+    let moved = piece.r * x + piece.t_hat * piece.lambda;
+    (moved.z > 0.0).then(|| RayPoint {
+        log_depth: x.z.ln(),
+        moved,
+        plane2: piece.r * piece.m / (piece.lambda * d),
+    })
+}
+
+/// The log-depth gaps of a boundary pair between pieces a and b on one ray:
+/// - frame 1: ln z_a − ln z_b (both planes on the ray);
+/// - frame 2: ½ (ln m'_bᵀX'_a − ln m'_aᵀX'_b), how far each moved point lies off the other's
+///   moved plane along its own camera-2 ray (0 when the surfaces still meet; a point sliding
+///   along the other's plane, as a foot along the floor, stays at 0).
+///
+/// Both change by ln λ_a − ln λ_b when the scales do, and are NaN where undefined.
+pub fn gaps(a: &RayPoint, b: &RayPoint) -> [f64; 2] {
+    let (ab, ba) = (b.plane2.dot(&a.moved), a.plane2.dot(&b.moved));
+    let g2 = if ab > 0.0 && ba > 0.0 {
+        0.5 * (ab.ln() - ba.ln())
     } else {
-        [x.z.ln(), f64::NAN]
-    }
+        f64::NAN
+    };
+    [a.log_depth - b.log_depth, g2]
 }
 
 /// The weight of boundary pair `j` of `edge`: colour similarity exp(−‖ΔI‖ / colour_scale)
