@@ -4,10 +4,19 @@
 use nalgebra::Vector3;
 
 use crate::camera::Intrinsics;
-use crate::formats::ply::PointCloud;
 use crate::grid::Grid;
 use crate::image::Frame;
 use crate::soup::Soup;
+
+/// Points with colours: `positions[i]` (x, y, z in the frame and units of whoever made the
+/// cloud; for [`point_clouds`], camera coordinates at the scene's scale) coloured `colours[i]`
+/// (sRGB bytes). The output of the pipeline, written by [`crate::formats::ply`] and shown by the
+/// page's viewer.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    pub positions: Vec<[f32; 3]>,
+    pub colours: Vec<[u8; 3]>,
+}
 
 /// Frame-1 z-depth at the working resolution: each pixel on its superpixel's plane; NaN where
 /// the plane puts it behind the camera.

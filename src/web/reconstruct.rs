@@ -369,8 +369,8 @@ pub struct CloudBuffers {
 
 impl CloudBuffers {
     fn new(
-        cloud1: &crate::formats::ply::PointCloud,
-        cloud2: &crate::formats::ply::PointCloud,
+        cloud1: &crate::output::PointCloud,
+        cloud2: &crate::output::PointCloud,
         labels: Vec<u32>,
     ) -> Self {
         CloudBuffers {
