@@ -427,7 +427,6 @@ fn js_error(error: Error) -> JsValue {
         Error::Format { .. } => "FormatError",
         Error::NoParallax(_) => "NoParallaxError",
         Error::InvalidParameter(_) => "InvalidParameterError",
-        Error::Graphics(_) => "GraphicsError",
     };
     let js = js_sys::Error::new(&error.to_string());
     js.set_name(name);
