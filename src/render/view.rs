@@ -1,6 +1,6 @@
 //! Everything the viewer shows and how, independent of the GPU: the cloud and the subset of it
 //! that is drawn, the point colours, the camera and its gestures, and the display settings.
-//! The GPU part ([`super::gpu`], wasm only) uploads what this produces: the packed point
+//! The GPU part (`gpu`, wasm only) uploads what this produces: the packed point
 //! buffers when their version changes, and the [`Uniforms`] every frame.
 
 use super::{RenderError, Result};

@@ -18,7 +18,7 @@
 //! the camera centre (the collapse of DESIGN.md Pitfalls). (Measuring against the nearer of the
 //! two depths instead was tried: it pushed floating movers back onto the background behind them,
 //! MRE 2.6 instead of 0.5 on ft3d-pair.) The continuity weight c_pq is
-//! [`contact_evidence`] instead of the paper's colour weight w4: two bodies in contact usually
+//! `contact_evidence` instead of the paper's colour weight w4: two bodies in contact usually
 //! differ in colour, and the scale solve needs exactly those contacts. α = 0 leaves eq. 1 alone.
 //!
 //! Every term depends on one difference of log-scales δ = ln λ_i − ln λ_k. Pieces that share a

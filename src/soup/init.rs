@@ -1,7 +1,7 @@
 //! The unit-scale soup: a rigid motion (R, t̂) and a plane m for every superpixel.
 //!
 //! 1. Correspondences: a spread-out sample of each superpixel's pixels with reliable flow.
-//! 2. Motion hypotheses ([`propose`]): a global RANSAC (the camera's ego-motion) and sequential
+//! 2. Motion hypotheses (`propose`): a global RANSAC (the camera's ego-motion) and sequential
 //!    RANSAC on what it leaves (other movers); then five-point RANSAC on each superpixel still
 //!    badly explained together with its K-NN neighbours (small movers, deforming parts).
 //! 3. Assignment as multi-model fitting (PEARL, Isack & Boykov 2012), not a per-superpixel
@@ -51,7 +51,7 @@ pub struct InitParams {
     pub label_cost_px: f64,
     /// A region of one hypothesis joins a touching region's hypothesis when that explains it at
     /// most this much worse on average (px per superpixel): large regions whose motions differ
-    /// only by the flow's systematic errors are one motion (see [`merge_similar`]).
+    /// only by the flow's systematic errors are one motion (see `merge_similar`).
     pub merge_px: f64,
     /// A superpixel's depth counts as observed when its translation moves it by this much (px).
     pub min_parallax_px: f64,
