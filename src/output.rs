@@ -1,5 +1,6 @@
-//! What a reconstruction gives: dense depth of frame 1 and the point clouds of both frames
-//! (X and X' = R X + λ t̂ per pixel, coloured from frame 1), from the scaled soup.
+//! What a reconstruction gives: dense depth of frame 1, the point clouds of both frames
+//! (X and X' = R X + λ t̂ per pixel, coloured from frame 1) and the scene flow, from a soup with
+//! its scales, and the [`PointCloud`] type they come in.
 
 use nalgebra::Vector3;
 
@@ -66,8 +67,8 @@ pub fn cloud_labels(labels: &Grid<u32>, depth: &Grid<f32>) -> Vec<u32> {
 
 /// Scene flow per pixel of frame 1 at the working resolution: X' − X with X = z x̄ (camera-1
 /// coordinates) and X' = R X + λ t̂ its position after the piece's motion (camera-2
-/// coordinates), as DESIGN.md stage 6 defines it (for a static point this is the camera motion's
-/// effect, not zero). NaN where the pixel has no depth.
+/// coordinates; docs/ARCHITECTURE.md, Conventions, Motion). For a static point this is the
+/// camera motion's effect, not zero. NaN where the pixel has no depth.
 pub fn scene_flow(
     soup: &Soup,
     labels: &Grid<u32>,

@@ -8,8 +8,8 @@
 //! - [`ransac`]: seeded RANSAC over any model;
 //! - [`triangulate`]: depths of a correspondence under a known motion.
 //!
-//! Motion convention (DESIGN.md): a point X in camera 1 is `R X + t` in camera 2, so
-//! x̄'ᵀ E x̄ = 0 with E = \[t\]ₓ R.
+//! Motion convention (docs/ARCHITECTURE.md, Conventions): a point X in camera 1 is `R X + t` in
+//! camera 2, so x̄'ᵀ E x̄ = 0 with E = \[t\]ₓ R.
 
 pub mod essential;
 pub mod five_point;

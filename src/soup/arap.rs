@@ -15,7 +15,7 @@
 //! of eq. 6 (E_proj of eq. 6 does not depend on λ), with every length measured relative to the
 //! mean depth z̄ of the two points it joins. That makes E independent of the global scale, so
 //! Σλ = 1 only fixes the gauge, and a piece can no longer make its terms vanish by shrinking to
-//! the camera centre (the collapse of DESIGN.md Pitfalls). (Measuring against the nearer of the
+//! the camera centre (docs/ARCHITECTURE.md, Pitfalls). (Measuring against the nearer of the
 //! two depths instead was tried: it pushed floating movers back onto the background behind them,
 //! MRE 2.6 instead of 0.5 on ft3d-pair.) The continuity weight c_pq is
 //! `contact_evidence` instead of the paper's colour weight w4: two bodies in contact usually

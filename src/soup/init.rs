@@ -5,12 +5,12 @@
 //!    RANSAC on what it leaves (other movers); then five-point RANSAC on each superpixel still
 //!    badly explained together with its K-NN neighbours (small movers, deforming parts).
 //! 3. Assignment as multi-model fitting (PEARL, Isack & Boykov 2012), not a per-superpixel
-//!    argmin: a planar patch is explained by many motions almost equally well (DESIGN.md
-//!    Pitfalls). The data cost of a superpixel under a hypothesis is the mean transfer error of
-//!    the hypothesis with its best plane (the paper's E_proj); touching superpixels with
-//!    different hypotheses pay a Potts penalty, and every hypothesis in use pays a label cost.
-//!    α-expansion minimises that energy; each used hypothesis is then refitted on its
-//!    superpixels and the assignment repeated.
+//!    argmin: a planar patch is explained by many motions almost equally well
+//!    (docs/ARCHITECTURE.md, Pitfalls). The data cost of a superpixel under a hypothesis is the
+//!    mean transfer error of the hypothesis with its best plane (the paper's E_proj); touching
+//!    superpixels with different hypotheses pay a Potts penalty, and every hypothesis in use
+//!    pays a label cost. α-expansion minimises that energy; each used hypothesis is then
+//!    refitted on its superpixels and the assignment repeated.
 //! 4. Planes: each superpixel's m under its motion by IRLS ([`super::plane`]); patches without
 //!    parallax or behind the camera are flagged and borrow a touching piece's plane and motion.
 

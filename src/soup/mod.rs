@@ -2,10 +2,10 @@
 //! a rigid motion, first at unit translation ([`init`]: the "unorganised" soup), then with the
 //! relative scales λ solved by the as-rigid-as-possible energy ([`arap`]: the "organised" soup).
 //!
-//! Conventions (DESIGN.md): camera 1 is the world frame (x right, y down, z forward). A piece's
-//! plane is mᵀX = 1, so a pixel with normalised ray x̄ = K⁻¹[u, v, 1]ᵀ has unit-scale depth
-//! z = 1 / (mᵀx̄). Its motion is X' = R X + λ t̂; scaling a piece by λ scales its depths by λ and
-//! its plane vector m by 1/λ, so the homography K (R + t̂ mᵀ) K⁻¹ is unchanged.
+//! Conventions (docs/ARCHITECTURE.md): camera 1 is the world frame (x right, y down, z forward).
+//! A piece's plane is mᵀX = 1, so a pixel with normalised ray x̄ = K⁻¹[u, v, 1]ᵀ has unit-scale
+//! depth z = 1 / (mᵀx̄). Its motion is X' = R X + λ t̂; scaling a piece by λ scales its depths by
+//! λ and its plane vector m by 1/λ, so the homography K (R + t̂ mᵀ) K⁻¹ is unchanged.
 //! The later refinement step (particle BP, eq. 3–6) will take a [`Soup`] and return a refined one.
 
 pub mod arap;
