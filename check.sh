@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up the toolchain and runs every check and test: formatting, clippy (native and wasm32),
 # the API docs without a warning, native tests (unit, integration, doc), the release wasm build,
-# the wasm tests in headless Chromium, and the end-to-end page tests. Stops at the first failing step and names it.
+# the wasm tests in headless Chromium, and the end-to-end page tests. Stops at the first failing
+# step and names it.
 # The last line is `N passed, N failed`, summed over the test suites.
 #
 # Browser flags live in two places only: webdriver.json (wasm-bindgen-test-runner) and
