@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Sets up the toolchain and runs every check and test: formatting, clippy (native and wasm32),
-# native tests (unit, integration, doc), the release wasm build, the wasm tests in headless
-# Chromium, and the end-to-end page tests. Stops at the first failing step and names it.
+# the API docs without a warning, native tests (unit, integration, doc), the release wasm build,
+# the wasm tests in headless Chromium, and the end-to-end page tests. Stops at the first failing
+# step and names it.
 # The last line is `N passed, N failed`, summed over the test suites.
 #
 # Browser flags live in two places only: webdriver.json (wasm-bindgen-test-runner) and
@@ -86,6 +87,11 @@ step "clippy (wasm32)" - cargo clippy --all-targets --target wasm32-unknown-unkn
 # The worker's lean module (scripts/build-web.sh) is the library without the `viewer` feature.
 step "clippy (wasm32, worker build)" - \
     cargo clippy --lib --target wasm32-unknown-unknown --no-default-features -- -D warnings
+# The API docs, native and wasm32 (the web API and the viewer's GPU part exist only there), with
+# every rustdoc warning (a broken intra-doc link, say) an error.
+step "cargo doc (native)" - env RUSTDOCFLAGS="-D warnings" cargo doc --no-deps
+step "cargo doc (wasm32)" - \
+    env RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --target wasm32-unknown-unknown
 step "cargo test (native)" count_cargo cargo test
 step "wasm release build + wasm-bindgen" - scripts/build-web.sh
 # Every test target is built for wasm32 and run by wasm-bindgen-test-runner; only

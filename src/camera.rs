@@ -1,7 +1,7 @@
 //! Pinhole intrinsics, where they came from, and how they follow a resize.
 //!
-//! Conventions (see DESIGN.md): pixel (u, v) with u right, v down and pixel centres at integers;
-//! camera axes x right, y down, z forward; K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]].
+//! Conventions (docs/ARCHITECTURE.md): pixel (u, v) with u right, v down and pixel centres at
+//! integers; camera axes x right, y down, z forward; K = [[fx, 0, cx], [0, fy, cy], [0, 0, 1]].
 
 use serde::{Deserialize, Serialize};
 

@@ -1,4 +1,5 @@
-//! The crate's one error type. Every fallible public function returns [`Result`].
+//! The library's error type: every fallible function of the pipeline, the formats and the
+//! evaluation returns [`Result`]. The 3D viewer has its own, [`crate::render::RenderError`].
 
 use std::path::PathBuf;
 
@@ -45,10 +46,6 @@ pub enum Error {
     /// A parameter is out of its valid range.
     #[error("invalid parameter: {0}")]
     InvalidParameter(String),
-    /// The browser's graphics (WebGPU / WebGL2) cannot do what the 3D view needs; the message
-    /// says what was tried.
-    #[error("{0}")]
-    Graphics(String),
 }
 
 /// Shorthand for results with the crate's [`Error`].

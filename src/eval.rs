@@ -1,7 +1,8 @@
-//! Accuracy metrics against ground truth, as defined in `../shared/eval/README.md`.
+//! Accuracy metrics against ground truth, as docs/ARCHITECTURE.md (Measuring) defines them, and
+//! where the evaluation data is read from ([`eval_case_dir`]).
 //!
 //! Depth is known only up to one global scale, so every depth metric first aligns the estimate:
-//! - MRE and δ<1.25 use s = median(z_gt / z) over pixels valid in both maps (the eval README);
+//! - MRE and δ<1.25 use s = median(z_gt / z) over pixels valid in both maps;
 //! - AbsRel uses the monocular-depth convention s = median(z_gt) / median(z).
 //!
 //! A depth is valid when finite and > 0; a flow vector when both components are finite.

@@ -1,13 +1,23 @@
-//! What a reconstruction gives: dense depth of frame 1 and the point clouds of both frames
-//! (X and X' = R X + λ t̂ per pixel, coloured from frame 1), from the scaled soup.
+//! What a reconstruction gives: dense depth of frame 1, the point clouds of both frames
+//! (X and X' = R X + λ t̂ per pixel, coloured from frame 1) and the scene flow, from a soup with
+//! its scales, and the [`PointCloud`] type they come in.
 
 use nalgebra::Vector3;
 
 use crate::camera::Intrinsics;
-use crate::formats::ply::PointCloud;
 use crate::grid::Grid;
 use crate::image::Frame;
 use crate::soup::Soup;
+
+/// Points with colours: `positions[i]` (x, y, z in the frame and units of whoever made the
+/// cloud; for [`point_clouds`], camera coordinates at the scene's scale) coloured `colours[i]`
+/// (sRGB bytes). The output of the pipeline, written by [`crate::formats::ply`] and shown by the
+/// page's viewer.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    pub positions: Vec<[f32; 3]>,
+    pub colours: Vec<[u8; 3]>,
+}
 
 /// Frame-1 z-depth at the working resolution: each pixel on its superpixel's plane; NaN where
 /// the plane puts it behind the camera.
@@ -57,8 +67,8 @@ pub fn cloud_labels(labels: &Grid<u32>, depth: &Grid<f32>) -> Vec<u32> {
 
 /// Scene flow per pixel of frame 1 at the working resolution: X' − X with X = z x̄ (camera-1
 /// coordinates) and X' = R X + λ t̂ its position after the piece's motion (camera-2
-/// coordinates), as DESIGN.md stage 6 defines it (for a static point this is the camera motion's
-/// effect, not zero). NaN where the pixel has no depth.
+/// coordinates; docs/ARCHITECTURE.md, Conventions, Motion). For a static point this is the
+/// camera motion's effect, not zero. NaN where the pixel has no depth.
 pub fn scene_flow(
     soup: &Soup,
     labels: &Grid<u32>,

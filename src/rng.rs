@@ -1,5 +1,5 @@
 //! A small seeded random number generator (PCG32, O'Neill 2014) so that every randomised step
-//! (RANSAC, particle proposals) gives the same result on every run and platform.
+//! (RANSAC samples, the viewer's decimation) gives the same result on every run and platform.
 
 /// PCG-XSH-RR 32-bit generator with a 64-bit state.
 #[derive(Clone, Debug)]

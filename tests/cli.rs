@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 use std::process::{Command, Output};
 
+use superpixel_soup::export::ExportFile;
 use superpixel_soup::formats::case::read_case;
 
 fn soup(args: &[&str]) -> Output {
@@ -303,4 +304,100 @@ fn superpixels_writes_labels_and_pictures() {
     assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
     assert!(stderr.contains("superpixel count"), "{stderr}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_fresh_process_writes_the_same_files() {
+    // The whole pipeline with computed flow, run twice in separate processes: flow, SLIC and the
+    // seeded RANSAC of the soup must not depend on anything that changes between runs (hash
+    // seeds, addresses, the clock), so every output is byte for byte the same; only the
+    // report's timings may differ.
+    // The flag, because its many motion hypotheses make the result depend on the RANSAC
+    // samples: with the seed changed per process its outputs differ (the street's happen not to).
+    let dir = temp_dir("fresh-process");
+    let out = soup(&[
+        "synth",
+        dir.to_str().unwrap(),
+        "--scene",
+        "flag",
+        "--size",
+        "256x110",
+    ]);
+    assert!(out.status.success());
+    let case = dir.join("flag");
+    let path = |name: &str| case.join(name).to_str().unwrap().to_string();
+    let run = |name: &str| {
+        let result = dir.join(name);
+        let out = soup(&[
+            "reconstruct",
+            &path("frame1.png"),
+            &path("frame2.png"),
+            "--superpixels",
+            "150",
+            "--preset",
+            "fast",
+            "--out",
+            result.to_str().unwrap(),
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        result
+    };
+    let (first, second) = (run("first"), run("second"));
+    let mut compared = 0;
+    for entry in std::fs::read_dir(&first).unwrap() {
+        let name = entry.unwrap().file_name();
+        let (a, b) = (
+            std::fs::read(first.join(&name)).unwrap(),
+            std::fs::read(second.join(&name)).unwrap(),
+        );
+        if name == "report.json" {
+            let without_timings = |bytes: &[u8]| {
+                let mut report: serde_json::Value = serde_json::from_slice(bytes).unwrap();
+                report.as_object_mut().unwrap().remove("timings_ms");
+                report
+            };
+            assert_eq!(without_timings(&a), without_timings(&b));
+        } else {
+            assert!(a == b, "{name:?} differs between two runs");
+        }
+        compared += 1;
+    }
+    assert_eq!(
+        compared,
+        ExportFile::ALL.len(),
+        "every output file compared"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn help_shows_the_library_defaults() {
+    // The defaults `--help` shows are the library's, not copies that could drift from it.
+    let params = superpixel_soup::Params::default();
+    let out = soup(&["reconstruct", "--help"]);
+    assert!(out.status.success());
+    let help = String::from_utf8_lossy(&out.stdout);
+    let preset = superpixel_soup::flow::Preset::default();
+    for (option, default) in [
+        ("--preset", preset.name().to_string()),
+        ("--superpixels", params.superpixels.count.to_string()),
+        ("--compactness", params.superpixels.compactness.to_string()),
+        ("--k", params.k.to_string()),
+        ("--beta", params.beta.to_string()),
+    ] {
+        let section = help
+            .split(&format!("{option} <"))
+            .nth(1)
+            .unwrap_or_else(|| panic!("{option} missing from:\n{help}"));
+        let shown = section.split("[default: ").nth(1).unwrap();
+        assert_eq!(shown.split(']').next().unwrap(), default, "{option}");
+    }
+    // Parameters without an option are listed with their defaults too.
+    let listed = help.split_once('{').map(|(_, rest)| format!("{{{rest}"));
+    let listed: serde_json::Value = serde_json::from_str(listed.as_deref().unwrap()).unwrap();
+    assert_eq!(listed, serde_json::to_value(params).unwrap());
 }

@@ -10,8 +10,8 @@ use superpixel_soup::formats::ply::Encoding;
 use superpixel_soup::formats::{flo, pfm, ply, png16};
 use superpixel_soup::image::{ExifInfo, LoadedImage, decode_image};
 use superpixel_soup::input::prepare_pair;
-use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::pipeline::Stage;
+use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::{FlowInput, Params, reconstruct};
 
 #[test]
@@ -94,5 +94,8 @@ fn every_file_decodes_at_its_resolution_with_the_reconstruction_values() {
     assert_eq!(report["working_size"], serde_json::json!([160, 68]));
     assert_eq!(report["camera"]["source"], "user");
     assert_eq!(rec.report.camera.source, IntrinsicsSource::User);
-    assert_eq!(report["timings_ms"].as_array().unwrap().len(), Stage::ALL.len());
+    assert_eq!(
+        report["timings_ms"].as_array().unwrap().len(),
+        Stage::ALL.len()
+    );
 }

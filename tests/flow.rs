@@ -269,22 +269,15 @@ fn textureless_and_mismatched_frames_fail_cleanly() {
 }
 
 #[test]
-fn every_preset_is_deterministic_and_reports_progress() {
+fn every_preset_reports_progress_from_0_to_1() {
+    // (That the same frames give the same flow in another process is tested with the CLI,
+    // tests/cli.rs.)
     let scene = render(SceneKind::Street, 192, 96).unwrap();
     for preset in Preset::ALL {
         let params = FlowParams::preset(preset);
         let mut seen = Vec::new();
-        let a = compute_flow(&scene.frame1, &scene.frame2, &params, &mut |f| seen.push(f)).unwrap();
-        let b = compute_flow(&scene.frame1, &scene.frame2, &params, &mut |_| {}).unwrap();
-        let bits = |f: &FlowField| -> Vec<u32> {
-            f.data()
-                .iter()
-                .flat_map(|v| [v[0].to_bits(), v[1].to_bits()])
-                .collect()
-        };
-        assert_eq!(bits(&a.forward), bits(&b.forward), "{}", preset.name());
-        assert_eq!(bits(&a.backward), bits(&b.backward), "{}", preset.name());
-        assert_eq!(a.reliable, b.reliable);
+        compute_flow(&scene.frame1, &scene.frame2, &params, &mut |f| seen.push(f)).unwrap();
+        assert!(seen.len() > 2, "{}: {seen:?}", preset.name());
         assert_eq!((seen.first(), seen.last()), (Some(&0.0), Some(&1.0)));
         assert!(seen.windows(2).all(|p| p[0] <= p[1]), "{seen:?}");
     }

@@ -1,5 +1,6 @@
 //! SLIC and the superpixel graphs on the synthetic scenes (exact depth for boundary recall) and on
-//! a real photo pair from `../shared/eval/` when present.
+//! a real photo pair from the evaluation data when present (`eval::eval_case_dir`). That the
+//! segmentation is the same in a fresh process is tested with the CLI (tests/cli.rs).
 #![cfg(not(target_arch = "wasm32"))]
 
 use superpixel_soup::eval::{boundary_recall, eval_case_dir};
@@ -165,19 +166,9 @@ fn graphs_are_consistent_with_the_labels() {
 }
 
 #[test]
-fn segmentation_is_deterministic() {
-    let frame: Frame = render(SceneKind::Crowd, 256, 110).unwrap().frame1;
-    let p = SlicParams {
-        count: 120,
-        ..SlicParams::default()
-    };
-    assert_eq!(slic(&frame, &p).unwrap(), slic(&frame, &p).unwrap());
-}
-
-#[test]
 fn real_photo_segments_cleanly() {
     let Some(dir) = eval_case_dir("middlebury-motorcycle") else {
-        eprintln!("skipping: ../shared/eval/middlebury-motorcycle is absent");
+        eprintln!("skipping: the evaluation case middlebury-motorcycle is absent");
         return;
     };
     let case = read_case(&dir).unwrap();
@@ -189,6 +180,11 @@ fn real_photo_segments_cleanly() {
     println!(
         "middlebury-motorcycle: {} superpixels, boundary recall {recall:.3}",
         sp.len()
+    );
+    // Measured 0.960 (README, Speed); the target is ≥ 0.9, as on the synthetic scenes.
+    assert!(
+        recall >= 0.9,
+        "middlebury-motorcycle: boundary recall {recall}"
     );
 }
 

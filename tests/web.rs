@@ -4,7 +4,7 @@
 
 use superpixel_soup::Grid;
 use superpixel_soup::image::{decode_image, encode_png};
-use superpixel_soup::web::{compute_flow, decode_image_info, version};
+use superpixel_soup::web::{compute_flow, decode_image_info};
 use wasm_bindgen::JsValue;
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
 
@@ -15,11 +15,6 @@ fn test_png() -> (superpixel_soup::image::Frame, Vec<u8>) {
     let frame = Grid::from_fn(7, 5, |x, y| [(x * 30) as u8, (y * 50) as u8, (x * y) as u8]);
     let png = encode_png(&frame).unwrap();
     (frame, png)
-}
-
-#[wasm_bindgen_test]
-fn version_is_the_crate_version() {
-    assert_eq!(version(), env!("CARGO_PKG_VERSION"));
 }
 
 #[wasm_bindgen_test]

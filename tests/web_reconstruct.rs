@@ -5,8 +5,11 @@
 #![cfg(target_arch = "wasm32")]
 
 use js_sys::Function;
+use superpixel_soup::Params;
+use superpixel_soup::flow::Preset;
 use superpixel_soup::formats::ply;
 use superpixel_soup::image::{Frame, encode_png};
+use superpixel_soup::input::DEFAULT_MAX_SIDE;
 use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::web::memory::failed_allocation;
 use superpixel_soup::web::reconstruct::{
@@ -203,9 +206,13 @@ fn exif_intrinsics_and_defaults_as_json() {
     assert_eq!(camera["intrinsics"]["cx"], 319.5);
 
     let defaults: serde_json::Value = serde_json::from_str(&page_defaults().unwrap()).unwrap();
-    assert_eq!(defaults["options"]["maxSide"], 1024);
-    assert_eq!(defaults["options"]["flowPreset"], "medium");
-    assert_eq!(defaults["options"]["params"]["k"], 15);
+    // The page's defaults are the library's, every parameter of them.
+    assert_eq!(defaults["options"]["maxSide"], DEFAULT_MAX_SIDE);
+    assert_eq!(defaults["options"]["flowPreset"], Preset::default().name());
+    assert_eq!(
+        defaults["options"]["params"],
+        serde_json::to_value(Params::default()).unwrap()
+    );
     assert_eq!(defaults["stages"].as_array().unwrap().len(), 5);
     assert_eq!(
         defaults["flowPresets"],

@@ -1,4 +1,5 @@
-//! The evaluation case layout of `../shared/eval/` (see its README): a folder holding
+//! The evaluation case layout (the public cases [`crate::eval::eval_case_dir`] finds are in it,
+//! and `soup synth` writes it): a folder holding
 //! `frame1.png`, `frame2.png`, optional `intrinsics.txt` (`fx fy cx cy`), `depth1.pfm`
 //! (z-depth of frame 1, NaN = unknown) and `flow12.flo`. Our synthetic scenes add
 //! `moving1.png` (255 where the surface moves in the world) and `groups1.png` (motion group per
@@ -204,13 +205,11 @@ mod tests {
     }
 
     #[test]
-    fn reads_the_shared_eval_cases_when_present() {
-        let root =
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/eval/middlebury-motorcycle");
-        if !root.exists() {
-            eprintln!("skipping: {} is absent", root.display());
+    fn reads_the_public_eval_case_when_present() {
+        let Some(root) = crate::eval::eval_case_dir("middlebury-motorcycle") else {
+            eprintln!("skipping: the evaluation case middlebury-motorcycle is absent");
             return;
-        }
+        };
         let case = read_case(&root).unwrap();
         assert_eq!(case.frame1.size(), (741, 500));
         assert!(case.intrinsics.is_some() && case.depth1.is_some() && case.flow12.is_some());

@@ -3,13 +3,7 @@
 //! other tools' files whose vertex element has those properties among others.
 
 use crate::error::{Error, Result};
-
-/// Points with colours, `positions[i]` in the writer's coordinate frame and units.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct PointCloud {
-    pub positions: Vec<[f32; 3]>,
-    pub colours: Vec<[u8; 3]>,
-}
+use crate::output::PointCloud;
 
 /// PLY body encoding.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -1,4 +1,4 @@
-//! The essential matrix E = [t]ₓ R on normalised coordinates (x̄'ᵀ E x̄ = 0): linear estimation,
+//! The essential matrix E = \[t\]ₓ R on normalised coordinates (x̄'ᵀ E x̄ = 0): linear estimation,
 //! decomposition into a rigid motion with the cheirality test, and the Sampson error.
 
 use nalgebra::{Matrix3, Vector3};

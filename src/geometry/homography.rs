@@ -1,9 +1,9 @@
 //! Plane-induced homographies on normalised coordinates: estimation by the normalised DLT and
 //! decomposition into motion and plane.
 //!
-//! Convention (DESIGN.md): points X on the plane mᵀX = 1 (m = n/d) move by X' = R X + t, so
-//! X' = (R + t mᵀ) X and x̄' ∝ H x̄ with H = R + t mᵀ. (Hartley–Zisserman write R − t nᵀ/d for
-//! their plane nᵀX + d = 0; the two agree with n ↦ −n.)
+//! Convention (docs/ARCHITECTURE.md, Homography sign): points X on the plane mᵀX = 1 (m = n/d)
+//! move by X' = R X + t, so X' = (R + t mᵀ) X and x̄' ∝ H x̄ with H = R + t mᵀ.
+//! (Hartley–Zisserman write R − t nᵀ/d for their plane nᵀX + d = 0; the two agree with n ↦ −n.)
 
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 
@@ -182,7 +182,8 @@ mod tests {
 
     #[test]
     fn the_plane_convention_maps_plane_points() {
-        // x̄' ∝ (R + t mᵀ) x̄ exactly for points on mᵀX = 1: the sign test of DESIGN.md.
+        // x̄' ∝ (R + t mᵀ) x̄ exactly for points on mᵀX = 1: the sign test that
+        // docs/ARCHITECTURE.md (Homography sign) asks for.
         let p = truth();
         let h = plane_homography(&p.motion, &p.m);
         for c in points(&p, 20, 0.0, &mut Rng::new(1)) {

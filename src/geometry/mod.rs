@@ -8,8 +8,8 @@
 //! - [`ransac`]: seeded RANSAC over any model;
 //! - [`triangulate`]: depths of a correspondence under a known motion.
 //!
-//! Motion convention (DESIGN.md): a point X in camera 1 is `R X + t` in camera 2, so
-//! x̄'ᵀ E x̄ = 0 with E = [t]ₓ R.
+//! Motion convention (docs/ARCHITECTURE.md, Conventions): a point X in camera 1 is `R X + t` in
+//! camera 2, so x̄'ᵀ E x̄ = 0 with E = \[t\]ₓ R.
 
 pub mod essential;
 pub mod five_point;
@@ -26,7 +26,7 @@ pub struct Correspondence {
     pub x2: Vector3<f64>,
 }
 
-/// The cross-product matrix [v]ₓ, with [v]ₓ w = v × w.
+/// The cross-product matrix \[v\]ₓ, with \[v\]ₓ w = v × w.
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }

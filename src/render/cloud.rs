@@ -1,6 +1,6 @@
 //! The viewer's input: a point cloud in two frames, as plain buffers, checked once.
 
-use crate::error::{Error, Result};
+use super::{RenderError, Result};
 
 /// Points seen in two frames: for each point its position in frame 1 (X) and frame 2 (X'),
 /// both in camera 1's OpenCV frame (x right, y down, z forward, any length unit), its colour
@@ -24,7 +24,7 @@ impl PointCloud {
         rgb: &[u8],
         labels: Option<&[u32]>,
     ) -> Result<PointCloud> {
-        let bad = |reason: String| Error::InvalidParameter(format!("point cloud: {reason}"));
+        let bad = |reason: String| RenderError::InvalidParameter(format!("point cloud: {reason}"));
         if !pos1.len().is_multiple_of(3) {
             return Err(bad(format!(
                 "frame-1 positions hold {} numbers, not a multiple of 3 (x, y, z per point)",

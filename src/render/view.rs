@@ -1,9 +1,9 @@
 //! Everything the viewer shows and how, independent of the GPU: the cloud and the subset of it
 //! that is drawn, the point colours, the camera and its gestures, and the display settings.
-//! The GPU part ([`super::gpu`], wasm only) uploads what this produces: the packed point
+//! The GPU part (`gpu`, wasm only) uploads what this produces: the packed point
 //! buffers when their version changes, and the [`Uniforms`] every frame.
 
-use crate::error::{Error, Result};
+use super::{RenderError, Result};
 
 use super::camera::{Bounds, Camera, DEFAULT_FOV_Y, Viewport};
 use super::cloud::PointCloud;
@@ -152,7 +152,7 @@ impl View {
     /// move along straight lines X + t·(X' − X).
     pub fn set_morph(&mut self, t: f32) -> Result<()> {
         if !(0.0..=1.0).contains(&t) {
-            return Err(Error::InvalidParameter(format!(
+            return Err(RenderError::InvalidParameter(format!(
                 "morph must be between 0 (frame 1) and 1 (frame 2), not {t}"
             )));
         }
@@ -165,7 +165,7 @@ impl View {
         match frame {
             1 => self.set_morph(0.0),
             2 => self.set_morph(1.0),
-            other => Err(Error::InvalidParameter(format!(
+            other => Err(RenderError::InvalidParameter(format!(
                 "frame must be 1 or 2, not {other}"
             ))),
         }
@@ -174,7 +174,7 @@ impl View {
     /// Point side length in CSS pixels, clamped to [1, [`MAX_POINT_SIZE`]].
     pub fn set_point_size(&mut self, size: f32) -> Result<()> {
         if !size.is_finite() || size <= 0.0 {
-            return Err(Error::InvalidParameter(format!(
+            return Err(RenderError::InvalidParameter(format!(
                 "point size must be a positive number of pixels, not {size}"
             )));
         }
@@ -187,7 +187,7 @@ impl View {
     /// Takes effect at the next [`View::reset_view`].
     pub fn set_field_of_view(&mut self, degrees: f32) -> Result<()> {
         if !(degrees > 0.0 && degrees < 180.0) {
-            return Err(Error::InvalidParameter(format!(
+            return Err(RenderError::InvalidParameter(format!(
                 "field of view must be between 0 and 180 degrees, not {degrees}"
             )));
         }

@@ -1,16 +1,16 @@
 //! The unit-scale soup: a rigid motion (R, t̂) and a plane m for every superpixel.
 //!
 //! 1. Correspondences: a spread-out sample of each superpixel's pixels with reliable flow.
-//! 2. Motion hypotheses ([`propose`]): a global RANSAC (the camera's ego-motion) and sequential
+//! 2. Motion hypotheses (`propose`): a global RANSAC (the camera's ego-motion) and sequential
 //!    RANSAC on what it leaves (other movers); then five-point RANSAC on each superpixel still
 //!    badly explained together with its K-NN neighbours (small movers, deforming parts).
 //! 3. Assignment as multi-model fitting (PEARL, Isack & Boykov 2012), not a per-superpixel
-//!    argmin: a planar patch is explained by many motions almost equally well (DESIGN.md
-//!    Pitfalls). The data cost of a superpixel under a hypothesis is the mean transfer error of
-//!    the hypothesis with its best plane (the paper's E_proj); touching superpixels with
-//!    different hypotheses pay a Potts penalty, and every hypothesis in use pays a label cost.
-//!    α-expansion minimises that energy; each used hypothesis is then refitted on its
-//!    superpixels and the assignment repeated.
+//!    argmin: a planar patch is explained by many motions almost equally well
+//!    (docs/ARCHITECTURE.md, Pitfalls). The data cost of a superpixel under a hypothesis is the
+//!    mean transfer error of the hypothesis with its best plane (the paper's E_proj); touching
+//!    superpixels with different hypotheses pay a Potts penalty, and every hypothesis in use
+//!    pays a label cost. α-expansion minimises that energy; each used hypothesis is then
+//!    refitted on its superpixels and the assignment repeated.
 //! 4. Planes: each superpixel's m under its motion by IRLS ([`super::plane`]); patches without
 //!    parallax or behind the camera are flagged and borrow a touching piece's plane and motion.
 
@@ -51,7 +51,7 @@ pub struct InitParams {
     pub label_cost_px: f64,
     /// A region of one hypothesis joins a touching region's hypothesis when that explains it at
     /// most this much worse on average (px per superpixel): large regions whose motions differ
-    /// only by the flow's systematic errors are one motion (see [`merge_similar`]).
+    /// only by the flow's systematic errors are one motion (see `merge_similar`).
     pub merge_px: f64,
     /// A superpixel's depth counts as observed when its translation moves it by this much (px).
     pub min_parallax_px: f64,

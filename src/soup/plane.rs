@@ -1,9 +1,9 @@
 //! A superpixel's plane under a given motion, and how well the pair explains its flow.
 //!
 //! Under a motion (R, t̂) a pixel on the plane mᵀX = 1 moves to x̄' ∝ R x̄ + t̂ (mᵀx̄), so
-//! [x̄']ₓ t̂ (x̄ᵀm) = −[x̄']ₓ R x̄ (DESIGN.md stage 3): three equations, linear in m, per
-//! correspondence. With a = x̄' × t̂ and b = −x̄' × R x̄ they read a (x̄ᵀm) = b, whose least-squares
-//! solution weighs each point by its parallax |a|²: Σ |a|² x̄ x̄ᵀ m = Σ (a·b) x̄.
+//! [x̄']ₓ t̂ (x̄ᵀm) = −[x̄']ₓ R x̄ (docs/ARCHITECTURE.md, The soup): three equations, linear in
+//! m, per correspondence. With a = x̄' × t̂ and b = −x̄' × R x̄ they read a (x̄ᵀm) = b, whose
+//! least-squares solution weighs each point by its parallax |a|²: Σ |a|² x̄ x̄ᵀ m = Σ (a·b) x̄.
 
 use nalgebra::{Matrix3, Vector3};
 

@@ -9,6 +9,7 @@
 //!   `resolveIntrinsics`, `pageDefaults`) and the result's pictures, clouds and export files
 //! - [`memory`]: out-of-memory reporting (`failedAllocation`, `memoryBytes`)
 //! - `flow`: `computeFlow`
+//! - [`superpixels`]: SLIC for the page (`computeSuperpixels`)
 //! - [`viewer`] (feature `viewer`, on by default): the 3D point-cloud viewer. The worker's lean
 //!   module (scripts/build-web.sh) is built without it.
 

@@ -369,8 +369,8 @@ pub struct CloudBuffers {
 
 impl CloudBuffers {
     fn new(
-        cloud1: &crate::formats::ply::PointCloud,
-        cloud2: &crate::formats::ply::PointCloud,
+        cloud1: &crate::output::PointCloud,
+        cloud2: &crate::output::PointCloud,
         labels: Vec<u32>,
     ) -> Self {
         CloudBuffers {
@@ -427,7 +427,6 @@ fn js_error(error: Error) -> JsValue {
         Error::Format { .. } => "FormatError",
         Error::NoParallax(_) => "NoParallaxError",
         Error::InvalidParameter(_) => "InvalidParameterError",
-        Error::Graphics(_) => "GraphicsError",
     };
     let js = js_sys::Error::new(&error.to_string());
     js.set_name(name);

@@ -31,8 +31,8 @@ use web_sys::{
     WheelEvent,
 };
 
-use crate::error::Error;
 use crate::image::encode_png;
+use crate::render::RenderError;
 use crate::render::cloud::PointCloud;
 use crate::render::colour::ColourMode;
 use crate::render::controls::Drag;
@@ -364,7 +364,10 @@ impl Viewer {
 
 impl Viewer {
     /// Applies `change` to the view and schedules a redraw.
-    fn update(&self, change: impl FnOnce(&mut View) -> crate::Result<()>) -> Result<(), JsError> {
+    fn update(
+        &self,
+        change: impl FnOnce(&mut View) -> crate::render::Result<()>,
+    ) -> Result<(), JsError> {
         let mut inner = self.inner.borrow_mut();
         change(&mut inner.view)?;
         inner.request_frame();
@@ -515,13 +518,13 @@ struct Options {
 }
 
 impl Options {
-    fn read(options: Option<&js_sys::Object>) -> crate::Result<Options> {
+    fn read(options: Option<&js_sys::Object>) -> crate::render::Result<Options> {
         let get = |name: &str| {
             options
                 .and_then(|o| js_sys::Reflect::get(o, &name.into()).ok())
                 .filter(|v| !v.is_undefined() && !v.is_null())
         };
-        let bad = |what: &str| Error::InvalidParameter(format!("viewer option {what}"));
+        let bad = |what: &str| RenderError::InvalidParameter(format!("viewer option {what}"));
         let backend = match get("backend") {
             None => BackendChoice::Auto,
             Some(v) => v
@@ -570,6 +573,6 @@ fn default_point_budget() -> usize {
     }
 }
 
-fn to_js(error: Error) -> JsValue {
+fn to_js(error: impl std::error::Error) -> JsValue {
     JsError::from(error).into()
 }

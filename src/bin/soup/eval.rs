@@ -7,7 +7,7 @@ use serde::Serialize;
 use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::camera::resolve_intrinsics;
 use superpixel_soup::eval::{DepthMetrics, depth_metrics, median};
-use superpixel_soup::flow::{FlowParams, Preset};
+use superpixel_soup::flow::FlowParams;
 use superpixel_soup::formats::case::{Case, read_case};
 use superpixel_soup::formats::write_file;
 use superpixel_soup::grid::Grid;
@@ -18,8 +18,11 @@ use superpixel_soup::soup::scales::{self, ScaleInputs};
 use superpixel_soup::soup::{Soup, refine};
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
 
+use crate::params::{PipelineArgs, all_defaults_help};
+
 /// Run the reconstruction on cases in the evaluation layout and score the depth.
 #[derive(clap::Args)]
+#[command(after_long_help = all_defaults_help())]
 pub struct Args {
     /// Case folders (frame1.png, frame2.png, intrinsics.txt, depth1.pfm, flow12.flo).
     #[arg(required = true)]
@@ -27,18 +30,11 @@ pub struct Args {
     /// Use the case's ground-truth flow12.flo instead of computed flow (the oracle-flow ablation).
     #[arg(long)]
     gt_flow: bool,
-    /// Preset of the computed flow: fast, medium or high.
-    #[arg(long, default_value = "medium")]
-    preset: String,
     /// Also write all numbers as JSON.
     #[arg(long)]
     json: Option<PathBuf>,
-    /// Requested number of superpixels.
-    #[arg(long, default_value_t = 1500)]
-    superpixels: usize,
-    /// Neighbours in the K-NN graph.
-    #[arg(long, default_value_t = 15)]
-    k: usize,
+    #[command(flatten)]
+    pipeline: PipelineArgs,
     /// Also print, per motion hypothesis in use, its superpixels, the ground-truth motion group
     /// most of its pixels belong to (and that share) and the error of its solved scale.
     #[arg(long)]
@@ -69,10 +65,8 @@ struct CaseResult {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let mut params = Params::default();
-    params.superpixels.count = args.superpixels;
-    params.k = args.k;
-    let flow_params = FlowParams::preset(Preset::from_name(&args.preset)?);
+    let params = args.pipeline.params();
+    let flow_params = args.pipeline.flow_params()?;
     println!(
         "| case | MRE | AbsRel | δ<1.25 | coverage | oracle-superpixel MRE | oracle-group MRE | constant-depth MRE | hypotheses | seconds |"
     );

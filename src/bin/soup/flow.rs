@@ -29,7 +29,7 @@ pub struct Args {
     #[arg(long)]
     viz: Option<PathBuf>,
     /// Speed/accuracy preset: fast, medium or high.
-    #[arg(long, default_value = "medium")]
+    #[arg(long, default_value_t = Preset::default().name().to_string())]
     preset: String,
     /// Instead of two frames, score the flow on these case folders (frame1.png, frame2.png,
     /// flow12.flo) and print a table.

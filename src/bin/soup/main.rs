@@ -9,6 +9,7 @@ use clap::{Parser, Subcommand};
 
 mod eval;
 mod flow;
+mod params;
 mod reconstruct;
 mod superpixels;
 mod synth;

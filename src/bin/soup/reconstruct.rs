@@ -4,15 +4,17 @@ use std::path::PathBuf;
 
 use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::export::{self, ExportFile};
-use superpixel_soup::flow::{FlowParams, Preset};
 use superpixel_soup::formats::ply::Encoding;
 use superpixel_soup::formats::{flo, read_file, write_file};
 use superpixel_soup::image::read_image_file;
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
-use superpixel_soup::{Error, FlowInput, Params, Result, reconstruct};
+use superpixel_soup::{Error, FlowInput, Result, reconstruct};
+
+use crate::params::{PipelineArgs, all_defaults_help};
 
 /// Reconstruct a dense 3D model of both frames from two photos.
 #[derive(clap::Args)]
+#[command(after_long_help = all_defaults_help())]
 pub struct Args {
     /// Reference frame (PNG or JPEG).
     frame1: PathBuf,
@@ -28,15 +30,8 @@ pub struct Args {
     /// is computed (DIS with variational refinement, forward–backward checked).
     #[arg(long)]
     flow: Option<PathBuf>,
-    /// Preset of the computed flow: fast, medium or high.
-    #[arg(long, default_value = "medium")]
-    preset: String,
-    /// Requested number of superpixels.
-    #[arg(long, default_value_t = 1500)]
-    superpixels: usize,
-    /// Neighbours in the K-NN graph (local motion hypotheses).
-    #[arg(long, default_value_t = 15)]
-    k: usize,
+    #[command(flatten)]
+    pipeline: PipelineArgs,
     /// Long side of the working resolution, in pixels.
     #[arg(long, default_value_t = DEFAULT_MAX_SIDE)]
     max_side: usize,
@@ -59,12 +54,10 @@ pub fn run(args: Args) -> Result<()> {
         .transpose()?;
     let flow = match &args.flow {
         Some(path) => FlowInput::Given(flo::decode(&read_file(path)?)?),
-        None => FlowInput::Compute(FlowParams::preset(Preset::from_name(&args.preset)?)),
+        None => FlowInput::Compute(args.pipeline.flow_params()?),
     };
     let pair = prepare_pair(image1, image2, user, args.max_side)?;
-    let mut params = Params::default();
-    params.superpixels.count = args.superpixels;
-    params.k = args.k;
+    let mut params = args.pipeline.params();
     if args.no_refine {
         params.refine.iterations = 0;
     }

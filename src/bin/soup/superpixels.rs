@@ -14,11 +14,12 @@ use superpixel_soup::superpixels::{SlicParams, slic};
 pub struct Args {
     /// The image (PNG or JPEG), segmented at its own resolution.
     frame: PathBuf,
-    /// Requested number of superpixels.
-    #[arg(long, default_value_t = 1500)]
+    /// Requested number of superpixels (the result is within a few percent of it).
+    #[arg(long, default_value_t = SlicParams::default().count)]
     n: usize,
-    /// Compactness m: larger gives more regular, less colour-driven superpixels.
-    #[arg(long, default_value_t = 10.0)]
+    /// Compactness m: weight of spatial against colour distance; larger gives more regular, less
+    /// colour-driven superpixels.
+    #[arg(long, default_value_t = SlicParams::default().compactness)]
     compactness: f32,
     /// Where to write the labels (16-bit greyscale PNG, label = pixel value).
     #[arg(long)]

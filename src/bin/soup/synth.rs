@@ -14,7 +14,7 @@ use superpixel_soup::synth::{SceneKind, render};
 /// Render synthetic dynamic scenes with exact depth and flow, in the evaluation case layout.
 #[derive(clap::Args)]
 pub struct Args {
-    /// Folder to write into; each scene goes to OUT_DIR/<scene name>/.
+    /// Folder to write into; each scene goes to OUT_DIR/SCENE/ (its name, e.g. OUT_DIR/street/).
     out_dir: PathBuf,
     /// Scene to render (static-room, street, crowd, flag) or `all`.
     #[arg(long, default_value = "all")]

@@ -19,7 +19,7 @@ use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::JsFuture;
 use web_sys::HtmlCanvasElement;
 
-use crate::error::{Error, Result};
+use crate::render::{RenderError, Result};
 
 use super::view::View;
 use points::PointPass;
@@ -55,14 +55,14 @@ pub enum BackendChoice {
 }
 
 impl FromStr for BackendChoice {
-    type Err = Error;
+    type Err = RenderError;
 
     fn from_str(s: &str) -> Result<Self> {
         match s {
             "auto" => Ok(BackendChoice::Auto),
             "webgpu" => Ok(BackendChoice::WebGpu),
             "webgl2" => Ok(BackendChoice::WebGl2),
-            other => Err(Error::InvalidParameter(format!(
+            other => Err(RenderError::InvalidParameter(format!(
                 "backend must be \"auto\", \"webgpu\" or \"webgl2\", not {other:?}"
             ))),
         }
@@ -99,7 +99,7 @@ impl Gpu {
                 Err(reason) => failures.push(format!("WebGL2: {reason}")),
             }
         }
-        Err(Error::Graphics(format!(
+        Err(RenderError::Graphics(format!(
             "this browser cannot show the 3D view ({})",
             failures.join("; ")
         )))

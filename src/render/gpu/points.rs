@@ -116,7 +116,8 @@ impl PointPass {
     }
 
     /// Draws `view` into `target` (of `format`, `size` pixels): clears to the background, then
-    /// draws every shown point as a quad, depth-tested. Submits the work.
+    /// draws every shown point as a square (one triangle, fetched from the textures),
+    /// depth-tested. Submits the work.
     pub(super) fn draw(
         &mut self,
         device: &wgpu::Device,

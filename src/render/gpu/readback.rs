@@ -7,10 +7,10 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU8, Ordering};
 
-use crate::error::{Error, Result};
 use crate::grid::Grid;
 use crate::image::Frame;
 use crate::render::view::View;
+use crate::render::{RenderError, Result};
 
 use super::points::PointPass;
 use super::sleep;
@@ -137,7 +137,7 @@ impl PendingPicture {
             let mapped = self
                 .buffer
                 .get_mapped_range(..)
-                .map_err(|e| Error::Graphics(format!("cannot read the picture back: {e}")))?;
+                .map_err(|e| RenderError::Graphics(format!("cannot read the picture back: {e}")))?;
             let mut pixels = Vec::with_capacity(self.width as usize * self.height as usize);
             for row in mapped.chunks_exact(self.padded_row) {
                 pixels.extend(row[..row_bytes].chunks_exact(4).map(|p| [p[0], p[1], p[2]]));
@@ -146,6 +146,7 @@ impl PendingPicture {
         };
         self.buffer.unmap();
         Grid::from_vec(self.width as usize, self.height as usize, pixels)
+            .map_err(|e| RenderError::Graphics(format!("the picture read back is malformed: {e}")))
     }
 }
 
@@ -175,11 +176,11 @@ async fn wait_for(device: &wgpu::Device, state: &AtomicU8, what: &str) -> Result
         let _ = device.poll(wgpu::PollType::Poll);
         match state.load(Ordering::Acquire) {
             DONE => return Ok(()),
-            FAILED => return Err(Error::Graphics(format!("{what} failed"))),
+            FAILED => return Err(RenderError::Graphics(format!("{what} failed"))),
             _ => {}
         }
         if js_sys::Date::now() - start > TIMEOUT_MS {
-            return Err(Error::Graphics(format!(
+            return Err(RenderError::Graphics(format!(
                 "{what}: the GPU did not answer within {} s",
                 TIMEOUT_MS / 1000.0
             )));
