@@ -2,7 +2,7 @@
 //! - the boundary graph: for every pair of touching superpixels, the 4-neighbouring pixel pairs
 //!   along their shared boundary (the paper's E_cont works on these), with each pair's colour
 //!   difference;
-//! - the K-NN graph over anchors (the paper's E_arap neighbourhoods) with weights
+//! - the K-NN graph over anchors (the neighbourhoods of local motion hypotheses) with weights
 //!   w = exp(−β ‖s_i − s_k‖), anchors normalised by the image's long side.
 
 use crate::grid::Grid;
