@@ -13,7 +13,7 @@ use crate::output::{PointCloud, dense_depth, depth_at, point_clouds, scene_flow}
 use crate::soup::Soup;
 use crate::soup::init::{InitParams, unit_scale_soup};
 use crate::soup::refine::{self, RefineParams, RefineReport};
-use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, solve_scales};
+use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, scale_confidence, solve_scales};
 use crate::superpixels::graph::{BoundaryGraph, KnnGraph, boundary_graph, knn_graph};
 use crate::superpixels::{SlicParams, Superpixels, slic};
 
@@ -110,6 +110,9 @@ pub struct Report {
     pub scales: ScaleReport,
     /// The refinement's energy per iteration (`None` when turned off).
     pub refine: Option<RefineReport>,
+    /// Superpixels whose scale the contacts do not pin (confidence below
+    /// `scales.min_confidence`): their depth relative to the rest is a guess.
+    pub unconfident: usize,
     pub notes: Vec<String>,
 }
 
@@ -127,8 +130,11 @@ pub struct Reconstruction {
     pub knn: KnnGraph,
     /// The soup before the scale solve (λ = 1: the "unorganised" soup).
     pub unit_soup: Soup,
-    /// The soup with relative scales (Σλ = 1: the "organised" soup).
+    /// The soup with relative scales, refined (median λ = 1: the "organised" soup).
     pub soup: Soup,
+    /// Per superpixel, how strongly the contacts pin its scale, in [0, 1]
+    /// ([`crate::soup::scales::scale_confidence`]).
+    pub confidence: Vec<f64>,
     /// Frame-1 depth at the working resolution (NaN = unknown).
     pub depth: Grid<f32>,
     /// Frame-1 depth at the input resolution (NaN = unknown).
@@ -206,6 +212,7 @@ pub fn reconstruct(
         let problem = refine::Problem::new(&soup, &inputs, &params.scales, &params.refine);
         refine::refine(&mut soup, &problem)
     });
+    let confidence = scale_confidence(&soup, &inputs, &params.scales);
     timings.push((Stage::Refine, clock.lap()));
 
     progress(Stage::Outputs, 0.0);
@@ -237,6 +244,10 @@ pub fn reconstruct(
         hypotheses: soup.hypotheses.len(),
         scales,
         refine,
+        unconfident: confidence
+            .iter()
+            .filter(|&&c| c < params.scales.min_confidence)
+            .count(),
         notes: pair.notes.clone(),
     };
     Ok(Reconstruction {
@@ -247,6 +258,7 @@ pub fn reconstruct(
         knn,
         unit_soup,
         soup,
+        confidence,
         depth,
         depth_input,
         cloud1,

@@ -51,6 +51,9 @@ pub struct Args {
 struct CaseResult {
     case: String,
     metrics: DepthMetrics,
+    /// The metrics over pixels whose superpixel's scale is confident (its coverage is their
+    /// share of the valid pixels).
+    confident: DepthMetrics,
     /// MRE with each superpixel of the unit-scale soup given its oracle scale (motion/plane error).
     oracle_superpixel_mre: f64,
     /// MRE with one oracle scale per ground-truth motion group (when the case has groups1.png).
@@ -68,21 +71,23 @@ pub fn run(args: Args) -> Result<()> {
     let params = args.pipeline.params();
     let flow_params = args.pipeline.flow_params()?;
     println!(
-        "| case | MRE | AbsRel | δ<1.25 | coverage | oracle-superpixel MRE | oracle-group MRE | constant-depth MRE | hypotheses | seconds |"
+        "| case | MRE | AbsRel | δ<1.25 | coverage | MRE confident | confident share | oracle-superpixel MRE | oracle-group MRE | constant-depth MRE | hypotheses | seconds |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut results = Vec::new();
     for dir in &args.cases {
         let case = read_case(dir)?;
         let computed = (!args.gt_flow).then_some(flow_params);
         let (result, rec) = evaluate(&case, &params, computed)?;
         println!(
-            "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {} | {:.4} | {} | {:.2} |",
+            "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {:.3} | {:.4} | {} | {:.4} | {} | {:.2} |",
             result.case,
             result.metrics.mre,
             result.metrics.abs_rel,
             result.metrics.delta_125,
             result.metrics.coverage,
+            result.confident.mre,
+            result.confident.coverage,
             result.oracle_superpixel_mre,
             result
                 .oracle_group_mre
@@ -145,10 +150,12 @@ fn evaluate(
     let rec = reconstruct(&pair, flow, params, &mut |_, _| {})?;
     let seconds = start.elapsed().as_secs_f64();
     let metrics = depth_metrics(gt, &rec.depth_input)?;
+    let confident = depth_metrics(gt, &confident_depth(&rec, gt.width(), gt.height()))?;
     let (oracle_superpixel_mre, oracle_group_mre) = oracles(&rec, case, gt, &camera.intrinsics);
     let result = CaseResult {
         case: case.name.clone(),
         metrics,
+        confident,
         oracle_superpixel_mre,
         oracle_group_mre,
         constant_mre: depth_metrics(gt, &Grid::filled(gt.width(), gt.height(), 1.0f32))?.mre,
@@ -159,6 +166,27 @@ fn evaluate(
         energy_end: rec.report.scales.energy_end,
     };
     Ok((result, rec))
+}
+
+/// The depth at the input resolution (`width` × `height`) where the superpixel's scale is
+/// confident, NaN elsewhere.
+fn confident_depth(rec: &Reconstruction, width: usize, height: usize) -> Grid<f32> {
+    let labels = &rec.superpixels.labels;
+    let (lw, lh) = labels.size();
+    let min = rec.report.params.scales.min_confidence;
+    Grid::from_fn(width, height, |x, y| {
+        let lx = ((x as f64 + 0.5) * lw as f64 / width as f64 - 0.5)
+            .round()
+            .clamp(0.0, (lw - 1) as f64) as usize;
+        let ly = ((y as f64 + 0.5) * lh as f64 / height as f64 - 0.5)
+            .round()
+            .clamp(0.0, (lh - 1) as f64) as usize;
+        if rec.confidence[*labels.get(lx, ly) as usize] >= min {
+            *rec.depth_input.get(x, y)
+        } else {
+            f32::NAN
+        }
+    })
 }
 
 /// Per motion hypothesis in use: superpixels, pixels, the ground-truth group holding most of its
