@@ -76,6 +76,10 @@ pub struct ScaleParams {
     pub flow_scale_px: f64,
     /// Smallest contact evidence of a pair (a pair of parallel planes whose flow jumps).
     pub evidence_floor: f64,
+    /// Weight factor of a pair where the lower piece is ground-like (its plane's normal within
+    /// 30° of the camera's vertical) and the upper piece stands on it: a standing thing touches
+    /// what it stands on, while its sides and top may or may not touch what is behind them.
+    pub support_weight: f64,
     /// A piece's scale counts as known when its [`scale_confidence`] is at least this: moving
     /// its rigid segment by 25 % breaks a tenth of the contacts on its rim.
     pub min_confidence: f64,
@@ -95,6 +99,7 @@ impl Default for ScaleParams {
             pairs_per_boundary: 12,
             continuous_flow_px: 1.0,
             min_confidence: 0.1,
+            support_weight: 4.0,
             flow_scale_px: 0.5,
             evidence_floor: 0.2,
         }
@@ -697,6 +702,21 @@ pub fn pair_weight(
         * contact_evidence(&pa.m, &pb.m, flow[p], flow[q], params);
     if !(reliable[p] && reliable[q]) {
         w *= params.occluded_weight;
+    }
+    // Vertical pairs: the piece of the lower pixel may support the other.
+    let width = inputs.superpixels.labels.width();
+    let lower = if q == p + width {
+        Some(pb)
+    } else if p == q + width {
+        Some(pa)
+    } else {
+        None
+    };
+    if let Some(ground) = lower {
+        let n = ground.m.normalize();
+        if n.y.abs() > 30f64.to_radians().cos() {
+            w *= params.support_weight;
+        }
     }
     w
 }
