@@ -401,3 +401,63 @@ fn help_shows_the_library_defaults() {
     let listed: serde_json::Value = serde_json::from_str(listed.as_deref().unwrap()).unwrap();
     assert_eq!(listed, serde_json::to_value(params).unwrap());
 }
+
+#[test]
+fn a_params_file_sets_parameters_and_rejects_unknown_ones() {
+    let dir = temp_dir("params");
+    let out = soup(&[
+        "synth",
+        dir.to_str().unwrap(),
+        "--scene",
+        "static-room",
+        "--size",
+        "256x110",
+    ]);
+    assert!(out.status.success());
+    let case = dir.join("static-room");
+    let intrinsics = std::fs::read_to_string(case.join("intrinsics.txt")).unwrap();
+    let path = |name: &str| case.join(name).to_str().unwrap().to_string();
+    let run = |params: &str| {
+        let file = dir.join("params.json");
+        std::fs::write(&file, params).unwrap();
+        let result = dir.join("result");
+        let out = soup(&[
+            "reconstruct",
+            &path("frame1.png"),
+            &path("frame2.png"),
+            "--flow",
+            &path("flow12.flo"),
+            "--intrinsics",
+            intrinsics.trim(),
+            "--params",
+            file.to_str().unwrap(),
+            "--out",
+            result.to_str().unwrap(),
+        ]);
+        let report = std::fs::read(result.join("report.json")).unwrap_or_default();
+        (
+            out,
+            serde_json::from_slice::<serde_json::Value>(&report).ok(),
+        )
+    };
+    // A nested field set, the others kept, recorded in the report.
+    let (out, report) = run(r#"{"superpixels": {"count": 120}, "refine": {"iterations": 2}}"#);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report = report.unwrap();
+    assert_eq!(report["params"]["superpixels"]["count"], 120);
+    assert_eq!(report["params"]["refine"]["iterations"], 2);
+    assert_eq!(report["refine"]["energies"].as_array().unwrap().len(), 3);
+    assert_eq!(
+        report["params"]["refine"]["particles"],
+        superpixel_soup::Params::default().refine.particles
+    );
+    // A typo is an error naming the field, not silently ignored.
+    let (out, _) = run(r#"{"refine": {"iteratons": 2}}"#);
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("unknown parameter refine.iteratons"), "{err}");
+}

@@ -68,7 +68,7 @@ struct CaseResult {
 }
 
 pub fn run(args: Args) -> Result<()> {
-    let params = args.pipeline.params();
+    let params = args.pipeline.params()?;
     let flow_params = args.pipeline.flow_params()?;
     println!(
         "| case | MRE | AbsRel | δ<1.25 | coverage | MRE confident | confident share | oracle-superpixel MRE | oracle-group MRE | constant-depth MRE | hypotheses | seconds |"

@@ -5,9 +5,10 @@
 //! the CLI, the page (which reads the same defaults through `pageDefaults`) and the library
 //! cannot drift apart.
 
+use std::path::{Path, PathBuf};
 use superpixel_soup::flow::{FlowParams, Preset};
-use superpixel_soup::superpixels::SlicParams;
-use superpixel_soup::{Params, Result};
+
+use superpixel_soup::{Error, Params, Result};
 
 /// Options that set pipeline parameters; the rest keep `Params::default()`.
 #[derive(clap::Args)]
@@ -32,27 +33,80 @@ pub struct PipelineArgs {
     /// side: larger ties each superpixel to its nearest neighbours only.
     #[arg(long, default_value_t = Params::default().beta)]
     pub beta: f64,
+    /// A JSON file setting any pipeline parameters (the shape of `params` in report.json; fields
+    /// left out keep their defaults, nested objects are merged). An option above overrides the
+    /// file when it differs from its default.
+    #[arg(long)]
+    pub params: Option<PathBuf>,
 }
 
 impl PipelineArgs {
-    /// `Params::default()` with the options given on the command line.
-    pub fn params(&self) -> Params {
-        let defaults = Params::default();
-        Params {
-            superpixels: SlicParams {
-                count: self.superpixels,
-                compactness: self.compactness,
-                ..defaults.superpixels
-            },
-            k: self.k,
-            beta: self.beta,
-            ..defaults
+    /// `Params::default()` with the `--params` file and the options given on the command line.
+    ///
+    /// Errors: the file cannot be read, is not JSON, or holds a field of the wrong type.
+    pub fn params(&self) -> Result<Params> {
+        let defaults = match &self.params {
+            Some(path) => params_from_file(path)?,
+            None => Params::default(),
+        };
+        let library = Params::default();
+        let mut params = defaults;
+        // An option at its library default leaves the file's value alone.
+        if self.superpixels != library.superpixels.count {
+            params.superpixels.count = self.superpixels;
         }
+        if self.compactness != library.superpixels.compactness {
+            params.superpixels.compactness = self.compactness;
+        }
+        if self.k != library.k {
+            params.k = self.k;
+        }
+        if self.beta != library.beta {
+            params.beta = self.beta;
+        }
+        Ok(params)
     }
 
     /// The flow parameters of `--preset`.
     pub fn flow_params(&self) -> Result<FlowParams> {
         Ok(FlowParams::preset(Preset::from_name(&self.preset)?))
+    }
+}
+
+/// `Params::default()` with the fields of the JSON file at `path` merged in.
+fn params_from_file(path: &Path) -> Result<Params> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let bad = |e: serde_json::Error| {
+        Error::InvalidParameter(format!("{}: not valid parameters: {e}", path.display()))
+    };
+    let given: serde_json::Value = serde_json::from_str(&text).map_err(bad)?;
+    let mut merged = serde_json::to_value(Params::default()).map_err(bad)?;
+    merge(&mut merged, given, "").map_err(|field| {
+        Error::InvalidParameter(format!("{}: unknown parameter {field}", path.display()))
+    })?;
+    serde_json::from_value(merged).map_err(bad)
+}
+
+/// Merges `given` into `base`: objects field by field, anything else replaced. Errors with the
+/// dotted name of a field that `base` does not have (a typo would otherwise pass unnoticed).
+fn merge(
+    base: &mut serde_json::Value,
+    given: serde_json::Value,
+    at: &str,
+) -> std::result::Result<(), String> {
+    match (base, given) {
+        (serde_json::Value::Object(b), serde_json::Value::Object(g)) => {
+            for (key, value) in g {
+                let name = format!("{at}{key}");
+                let slot = b.get_mut(&key).ok_or_else(|| name.clone())?;
+                merge(slot, value, &format!("{name}."))?;
+            }
+            Ok(())
+        }
+        (slot, value) => {
+            *slot = value;
+            Ok(())
+        }
     }
 }
 

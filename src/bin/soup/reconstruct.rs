@@ -57,7 +57,7 @@ pub fn run(args: Args) -> Result<()> {
         None => FlowInput::Compute(args.pipeline.flow_params()?),
     };
     let pair = prepare_pair(image1, image2, user, args.max_side)?;
-    let mut params = args.pipeline.params();
+    let mut params = args.pipeline.params()?;
     if args.no_refine {
         params.refine.iterations = 0;
     }
