@@ -1,0 +1,85 @@
+#!/usr/bin/env python3
+"""Robustness of the soup's defaults: every numeric parameter of the scale solve and the
+refinement is moved by -20 % and +20 % in turn (one at a time, integers rounded), and the MRE of
+each evaluation case is compared with the MRE at the defaults. Prints a Markdown table: per
+parameter, the largest change of any case's MRE and the case it happened on.
+
+Usage: scripts/sweep.py CASE_DIR... [--gt-flow] [--only NAME,...]
+  (needs a release build: cargo build --release --bin soup)
+
+Cases are evaluation folders: the synthetic scenes of `soup synth` and, when present, the public
+cases in ../shared/eval/. Each run of `soup eval` takes the cases' time (seconds per case), so a
+full sweep over ~16 parameters takes about (1 + 2 × 16) evaluations.
+"""
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+SOUP = os.path.join(os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "target")), "release", "soup")
+# Parameters that are not tunables: seeds, and switches whose ±20 % has no meaning.
+SKIP = {"seed"}
+
+
+def evaluate(cases, params, gt_flow):
+    """MRE per case for the given parameter overrides (a nested dict)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        params_file = os.path.join(tmp, "params.json")
+        out_file = os.path.join(tmp, "out.json")
+        with open(params_file, "w") as f:
+            json.dump(params, f)
+        cmd = [SOUP, "eval", *cases, "--params", params_file, "--json", out_file]
+        if gt_flow:
+            cmd.append("--gt-flow")
+        subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
+        with open(out_file) as f:
+            return {r["case"]: r["metrics"]["mre"] for r in json.load(f)}
+
+
+def defaults():
+    """The library's defaults, as `soup reconstruct --help` prints them."""
+    text = subprocess.run([SOUP, "reconstruct", "--help"], check=True, capture_output=True, text=True).stdout
+    return json.loads(text[text.index("{"): text.rindex("}") + 1])
+
+
+def main():
+    args = [a for a in sys.argv[1:]]
+    gt_flow = "--gt-flow" in args
+    only = None
+    if "--only" in args:
+        only = set(args[args.index("--only") + 1].split(","))
+        del args[args.index("--only"): args.index("--only") + 2]
+    cases = [a for a in args if not a.startswith("--")]
+    if not cases:
+        sys.exit(__doc__)
+    params = defaults()
+    base = evaluate(cases, {}, gt_flow)
+    print("defaults: " + ", ".join(f"{c} {m:.4f}" for c, m in base.items()))
+    print()
+    print("| parameter | default | −20 % | +20 % | largest MRE change | on case |")
+    print("| --- | --- | --- | --- | --- | --- |")
+    for group in ("scales", "refine"):
+        for name, value in params[group].items():
+            if name in SKIP or isinstance(value, bool) or not isinstance(value, (int, float)):
+                continue
+            if only and name not in only:
+                continue
+            worst = (0.0, "")
+            values = []
+            for factor in (0.8, 1.2):
+                v = value * factor
+                if isinstance(value, int):
+                    v = max(1, round(v)) if value > 0 else 0
+                values.append(v)
+                mre = evaluate(cases, {group: {name: v}}, gt_flow)
+                for case, m in mre.items():
+                    if abs(m - base[case]) > abs(worst[0]):
+                        worst = (m - base[case], case)
+            print(f"| {group}.{name} | {value} | {values[0]:g} | {values[1]:g} | {worst[0]:+.4f} | {worst[1]} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
