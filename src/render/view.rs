@@ -129,6 +129,15 @@ impl View {
         self.reset_view();
     }
 
+    /// Puts the camera where `camera` says (e.g. the camera of an earlier viewer of the same
+    /// cloud); the field of view stays this view's.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = Camera {
+            fov_y: self.fov_y,
+            ..camera
+        };
+    }
+
     /// Draws at most `budget` points (at least 1); larger clouds are decimated
     /// ([`decimate`]).
     pub fn set_point_budget(&mut self, budget: usize) {
