@@ -99,10 +99,11 @@ impl PageReconstruction {
         png_scale: Option<f64>,
     ) -> Result<String> {
         let gt = decode_depth(bytes, png_scale)?;
-        let est = &self.rec.depth_input;
-        check_size("depth", gt.size(), est.size())?;
-        let metrics = depth_metrics(&gt, est)?;
-        let errors = relative_errors(&gt, est, metrics.scale)?;
+        check_size("depth", gt.size(), self.rec.report.input_size)?;
+        let est = self.depth_at_input();
+        let metrics = depth_metrics(&gt, &est)?;
+        let errors = relative_errors(&gt, &est, metrics.scale)?;
+        drop(est);
         let (w, h) = self.frame1.size();
         let picture = resample(&relative_error_picture(&errors), w, h);
         let (colours, errors) = relative_error_legend(64);

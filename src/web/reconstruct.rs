@@ -21,6 +21,8 @@
 //! `TooSmallError`, `NoParallaxError`, `InvalidParameterError`, `DecodeError`, `FormatError`)
 //! and whose message is the library's readable one.
 
+use std::borrow::Cow;
+
 use js_sys::Function;
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
@@ -36,7 +38,7 @@ use crate::flow::{FlowParams, Preset};
 use crate::formats::ply::Encoding;
 use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
 use crate::input::{DEFAULT_MAX_SIDE, MIN_SIDE, prepare_pair};
-use crate::output::{cloud_labels, dense_depth, point_clouds};
+use crate::output::{cloud_labels, dense_depth, depth_at, point_clouds};
 use crate::pipeline::{FlowInput, Params, Reconstruction, Stage};
 use crate::superpixels::view::boundary_overlay;
 
@@ -239,17 +241,13 @@ pub fn reconstruct(
         options.max_side,
     )
     .map_err(js_error)?;
-    if let Some((w, h)) = photo_size
-        && (w, h) != pair.input_size
-    {
-        // Outputs at the input size (depth.pfm, flow.flo, the ground-truth scores) are at the
-        // photo's size, as if the library had downscaled it.
+    let photo_size = photo_size.filter(|&size| size != pair.input_size);
+    if let Some((w, h)) = photo_size {
         let (ww, wh) = pair.frame1.size();
         pair.notes.retain(|n| !n.starts_with("downscaled from"));
         pair.notes.push(format!(
             "downscaled from {w}×{h} to {ww}×{wh} (by the browser, as it decoded the photos)"
         ));
-        pair.input_size = (w, h);
     }
     let mut report = |stage: Stage, fraction: f32| {
         if let Some(callback) = &progress {
@@ -262,7 +260,14 @@ pub fn reconstruct(
         }
     };
     let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
-    let rec = crate::reconstruct(&pair, flow, &options.params, &mut report).map_err(js_error)?;
+    let mut rec =
+        crate::reconstruct(&pair, flow, &options.params, &mut report).map_err(js_error)?;
+    // The outputs at the input size (depth files, flow.flo, the ground-truth scores) are at the
+    // photo's size, as if the library had downscaled it; the depth at that size is made when
+    // asked for (a 12-megapixel depth map is 48 MB of wasm memory the run itself does not need).
+    if let Some(size) = photo_size {
+        rec.report.input_size = size;
+    }
     Ok(PageReconstruction {
         frame1: pair.frame1,
         rec,
@@ -281,6 +286,24 @@ pub struct PageReconstruction {
 }
 
 impl PageReconstruction {
+    /// Frame-1 depth at the input size (the photo's): the reconstruction's own, or, when the page
+    /// decoded the photos at the working size, the soup's depth rendered at the photo's size
+    /// with the intrinsics scaled to it.
+    pub(super) fn depth_at_input(&self) -> Cow<'_, crate::Grid<f32>> {
+        let rec = &self.rec;
+        let (iw, ih) = rec.report.input_size;
+        if rec.depth_input.size() == (iw, ih) {
+            return Cow::Borrowed(&rec.depth_input);
+        }
+        let (w, h) = self.frame1.size();
+        let k = rec
+            .report
+            .camera
+            .intrinsics
+            .scaled(iw as f64 / w as f64, ih as f64 / h as f64);
+        Cow::Owned(depth_at(&rec.soup, &rec.superpixels.labels, iw, ih, &k))
+    }
+
     /// `report.json`: the library's report, with the ground-truth scores when there are any.
     fn report_bytes(&self) -> crate::Result<Vec<u8>> {
         let bytes = export::report_json(&self.rec)?;
@@ -400,10 +423,21 @@ impl PageReconstruction {
     /// `flow.flo`, `report.json`, `depth.pfm`, `depth.png`, `labels.png`), exactly as
     /// `soup reconstruct --out` writes it (binary PLY).
     #[wasm_bindgen(js_name = exportFile)]
-    pub fn export_file(&self, name: &str) -> Result<Vec<u8>, JsError> {
+    pub fn export_file(&mut self, name: &str) -> Result<Vec<u8>, JsError> {
         let file = ExportFile::from_file_name(name)?;
         if file == ExportFile::Report {
             return Ok(self.report_bytes()?);
+        }
+        let depth_file = matches!(
+            file,
+            ExportFile::DepthPfm | ExportFile::DepthPng16 | ExportFile::DepthPicture
+        );
+        if depth_file && let Cow::Owned(depth) = self.depth_at_input() {
+            // Encoded with the photo-size depth in place, then the working-size one back.
+            let working = std::mem::replace(&mut self.rec.depth_input, depth);
+            let bytes = export::encode(&self.rec, file, Encoding::BinaryLittleEndian);
+            self.rec.depth_input = working;
+            return Ok(bytes?);
         }
         Ok(export::encode(
             &self.rec,

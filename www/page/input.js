@@ -99,15 +99,40 @@ export async function takeFiles(fileList) {
 /** Decodes an image file with the browser and reads its EXIF block with the library. */
 export async function decodeImage(file) {
   let bitmap;
+  let size;
   try {
-    bitmap = await createImageBitmap(file, DECODE);
+    size = await imageSize(file);
+    bitmap = await decodeAt(file, size, maxSide());
   } catch {
     throw new Error(`${file.name} could not be decoded: the file is damaged or in a format this ` +
       'browser cannot read.');
   }
   const bytes = await file.arrayBuffer();
   const { exif } = await page.pipeline.request('exif', { bytes }, [bytes]);
-  return makeFrame(file.name, bitmap, file, exif);
+  return makeFrame(file.name, bitmap, file, exif, size);
+}
+
+/**
+ * The upright size of an image file, from an <img> that is never shown (the browser reads the
+ * header and the EXIF orientation without decoding the pixels).
+ */
+function imageSize(file) {
+  const url = URL.createObjectURL(file);
+  const image = new Image();
+  return new Promise((resolve, reject) => {
+    image.onload = () => resolve([image.naturalWidth, image.naturalHeight]);
+    image.onerror = () => reject(new Error('cannot read the image'));
+    image.src = url;
+  }).finally(() => URL.revokeObjectURL(url));
+}
+
+/** Decodes `file` (upright size `size`) straight to the working size for `side`. */
+function decodeAt(file, [width, height], side) {
+  const [w, h] = workingSize(width, height, side);
+  if (w === width && h === height) {
+    return createImageBitmap(file, DECODE);
+  }
+  return createImageBitmap(file, { ...DECODE, resizeWidth: w, resizeHeight: h, resizeQuality: 'high' });
 }
 
 /** Decodes image files one after the other (only one photo is ever held at full size). */
@@ -159,11 +184,11 @@ async function shrink(full, side) {
 
 /**
  * A frame of `full` (the decoded pixels of `source`, or a video frame when `source` is null;
- * closed here): its size, a thumbnail and its pixels at the working size (`bitmap`, for
- * `side`, the long side it was made for).
+ * closed here unless already at the working size) whose own size is `width × height`: a
+ * thumbnail and its pixels at the working size (`bitmap`, for `side`, the long side it was made
+ * for).
  */
-async function makeFrame(name, full, source, exif) {
-  const [width, height] = [full.width, full.height];
+async function makeFrame(name, full, source, exif, [width, height] = [full.width, full.height]) {
   const side = maxSide();
   const bitmap = await shrink(full, side);
   const scale = Math.min(1, THUMBNAIL / Math.max(bitmap.width, bitmap.height));
@@ -184,7 +209,7 @@ export async function pixelsForRun(frame) {
   if (frame.side !== side && frame.source !== null) {
     const [w, h] = workingSize(frame.width, frame.height, side);
     if (w !== frame.bitmap.width || h !== frame.bitmap.height) {
-      const bitmap = await shrink(await createImageBitmap(frame.source, DECODE), side);
+      const bitmap = await decodeAt(frame.source, [frame.width, frame.height], side);
       frame.bitmap.close();
       frame.bitmap = bitmap;
     }

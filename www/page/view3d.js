@@ -98,6 +98,10 @@ async function restore(what, { backend, camera }) {
   const message = $('viewer-message');
   message.textContent = `The 3D view was interrupted (${what}); restoring it…`;
   message.hidden = false;
+  // A phone that put the tab in the background gives no GPU until it is shown again.
+  while (document.hidden) {
+    await new Promise((resolve) => document.addEventListener('visibilitychange', resolve, { once: true }));
+  }
   const canvas = $('view');
   const fresh = canvas.cloneNode(false);
   canvas.replaceWith(fresh);
