@@ -5,7 +5,8 @@
 // picture is drawn, and report.json carries the scores. A ground truth of another size, a
 // damaged file and a depth PNG without a scale each give a message while the result stays.
 //
-// Builds the `soup` CLI (release) the first time, like benches/page.mjs.
+// Runs the `soup` CLI through `cargo run` (the dev profile, optimised, which `cargo test` in
+// check.sh has built already).
 
 import { test, after } from 'node:test';
 import assert from 'node:assert/strict';
@@ -22,7 +23,7 @@ const work = mkdtempSync(path.join(tmpdir(), 'soup-truth-'));
 after(() => rmSync(work, { recursive: true, force: true }));
 
 function soup(...args) {
-  const done = spawnSync('cargo', ['run', '--quiet', '--release', '--bin', 'soup', '--', ...args], {
+  const done = spawnSync('cargo', ['run', '--quiet', '--bin', 'soup', '--', ...args], {
     cwd: ROOT,
     stdio: ['ignore', 'pipe', 'inherit'],
     encoding: 'utf8',

@@ -29,11 +29,11 @@ export async function takeFiles(fileList) {
   if (files.length === 0) {
     return;
   }
-  // Ground truth (groundtruth.js): .pfm, .dpt, .flo, and PNGs named as depth when two other
-  // images come with them, or alone once there is a result.
+  // Ground truth (groundtruth.js): .pfm, .dpt, .flo, and a PNG named as depth when two other
+  // images come with it, or alone once there is a result.
   const pngTruth = files.filter((f) => kindOf(f) === 'image' && isTruthFile(f, { withFrames: true }));
   const imageCount = files.filter((f) => kindOf(f) === 'image').length;
-  const truthPngs = imageCount - pngTruth.length === 2 || (imageCount === pngTruth.length && page.points > 0);
+  const truthPngs = imageCount - pngTruth.length === 2 || (imageCount === 1 && pngTruth.length === 1 && page.points > 0);
   const truth = files.filter((f) => isTruthFile(f) || (truthPngs && pngTruth.includes(f)));
   if (truth.length === files.length) {
     await takeTruth(truth);
