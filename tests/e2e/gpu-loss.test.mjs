@@ -10,9 +10,19 @@ import { alertText, analyseView, difference, openPage, waitForRunEnd } from './p
 
 const session = browserSession();
 
-/** Records every WebGPU device the page asks for (window.gpuDevices), so the test can destroy one. */
+/**
+ * Records every WebGPU device the page asks for (window.gpuDevices), so the test can destroy one;
+ * window.blockGpu makes WebGPU refuse.
+ */
 function recordDevices() {
   window.gpuDevices = [];
+  // While window.blockGpu is true, WebGPU hands out no adapter (a GPU that does not come back).
+  if (globalThis.GPU) {
+    const requestAdapter = GPU.prototype.requestAdapter;
+    GPU.prototype.requestAdapter = function (...args) {
+      return window.blockGpu ? Promise.resolve(null) : requestAdapter.apply(this, args);
+    };
+  }
   if (globalThis.GPUAdapter) {
     const request = GPUAdapter.prototype.requestDevice;
     GPUAdapter.prototype.requestDevice = async function (...args) {
@@ -73,3 +83,31 @@ for (const backend of ['webgl2', 'webgpu']) {
     await page.context().close();
   });
 }
+
+test('webgpu: when the GPU does not come back, the page says so and its button restores the view', async () => {
+  const { page, errors } = await openPage(session.browser, session.server.url, '?backend=webgpu', {}, recordDevices);
+  await page.click('#sample-button');
+  assert.equal(await waitForRunEnd(page), 'done', await alertText(page));
+  await page.locator('#view').scrollIntoViewIfNeeded();
+  const before = await analyseView(page);
+
+  await page.evaluate(() => {
+    window.blockGpu = true;
+    window.gpuDevices.at(-1).destroy();
+  });
+  await page.waitForFunction(() => document.body.dataset.viewer === 'failed', null, { timeout: 60_000 });
+  assert.match(await page.textContent('#viewer-message'),
+    /^The 3D view was interrupted \(the WebGPU device was lost\) and could not be restored \(.+\)\. The pictures and downloads still work\./);
+  assert.equal(await page.isVisible('#viewer-restore'), true);
+  // The rest of the page works meanwhile.
+  assert.equal(await page.evaluate(() => document.body.dataset.state), 'done');
+
+  await page.evaluate(() => { window.blockGpu = false; });
+  await page.click('#viewer-restore');
+  await page.waitForFunction(() => document.body.dataset.viewer === 'ready', null, { timeout: 60_000 });
+  assert.equal(await page.isHidden('#viewer-message'), true);
+  const restored = await analyseView(page);
+  assert.ok(difference(before, restored) < 0.02, `the restored view differs by ${difference(before, restored)}`);
+  assert.deepEqual(errors, []);
+  await page.context().close();
+});
