@@ -39,6 +39,10 @@ test('a reload restores the last result; start over forgets it', async () => {
   assert.ok(before.points > 100_000, `${before.points} points`);
 
   await page.reload();
+  // The kept outputs are shown at once, while the frames are reconstructed again.
+  await page.waitForFunction(() => document.body.dataset.restored === 'shown');
+  assert.equal(await page.isHidden('#results'), false);
+  assert.equal(await page.textContent('#summary'), before.summary);
   assert.equal(await waitForState(page, ['done', 'error']), 'done', await alertText(page));
   assert.match(await page.textContent('#status'), /^Restored your last result/);
   const after = await snapshot(page);

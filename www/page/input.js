@@ -7,6 +7,7 @@ import { INTRINSIC_FIELDS, fillForm, refreshIntrinsics, setIntrinsics } from './
 import { cancel, resetProgress, run } from './worker-client.js';
 import { dropPending, isTruthFile, resetTruth, takeTruth } from './groundtruth.js';
 import { clearSession, framesOf, loadSession, restoreForm } from './persist.js';
+import { showPictures } from './results.js';
 
 /** Options of createImageBitmap: pixels as stored (upright by EXIF), no colour management. */
 export const DECODE = { imageOrientation: 'from-image', colorSpaceConversion: 'none', premultiplyAlpha: 'none' };
@@ -422,6 +423,8 @@ export async function restoreLast() {
       frames.forEach(closeFrame);
       return;
     }
+    showPictures(record.outputs);
+    document.body.dataset.restored = 'shown';
     if (record.intrinsics.mode === 'user') {
       await setFrames(frames, { intrinsics: record.intrinsics.values, source: record.intrinsics.source });
     } else {

@@ -1,8 +1,9 @@
 // Results you can come back to: the last finished run is kept in IndexedDB (the two frames at
 // the working size as RGBA, their names, photo sizes and EXIF facts, the parameters panel, the
-// intrinsics and the report), so a reload of the tab, on purpose or by mistake, loses nothing:
-// the page restores the frames and parameters and runs the (deterministic) reconstruction again,
-// which gives the same outputs: 3D view, pictures, report and downloads. "Start over" forgets it.
+// intrinsics, and the outputs shown: pictures, legend and report), so a reload of the tab, on
+// purpose or by mistake, loses nothing: the page shows the kept outputs at once, and runs the
+// (deterministic) reconstruction of the kept frames again for what the worker holds (the 3D
+// cloud, downloads, ground-truth scores), which gives the same outputs. "Start over" forgets it.
 //
 // document.body.dataset.saved: "yes" once the last result is stored, "" otherwise (tests).
 
@@ -13,7 +14,7 @@ const DB_NAME = 'superpixel-soup';
 const STORE = 'session';
 const KEY = 'last';
 /** Bumped when the record's layout changes; older records are ignored. */
-const VERSION = 1;
+const VERSION = 2;
 
 function openDb() {
   return new Promise((resolve, reject) => {
@@ -54,8 +55,11 @@ function formValues() {
   return Object.fromEntries([...form.elements].filter((e) => e.name).map((e) => [e.name, e.value]));
 }
 
-/** Stores the current frames, parameters and `report` as the last result. */
-export async function saveSession(report) {
+/**
+ * Stores the current frames, parameters and the outputs shown of `result` (pictures, legend,
+ * report; the cloud is made again) as the last result.
+ */
+export async function saveSession(result) {
   document.body.dataset.saved = '';
   const frames = page.frames.map((frame) => ({
     name: frame.name,
@@ -71,7 +75,13 @@ export async function saveSession(report) {
     frames,
     form: formValues(),
     intrinsics: { mode: page.intrinsicsMode, source: $('intrinsics-source').textContent, values: formIntrinsics() },
-    report,
+    outputs: {
+      width: result.width,
+      height: result.height,
+      pictures: result.pictures,
+      legend: result.legend,
+      report: result.report,
+    },
   };
   try {
     await withStore('readwrite', (store) => store.put(record, KEY));

@@ -6,7 +6,19 @@ import { $, page } from './ui.js';
 import { STAGE_LABELS } from './worker-client.js';
 import { showCloud } from './view3d.js';
 
+/** Shows a result from the worker: pictures, report and the 3D view. */
 export async function showResult(result) {
+  showPictures(result);
+  page.points = result.cloud.count;
+  $('soup-mode').value = 'organised';
+  await showCloud(result.cloud);
+}
+
+/**
+ * Shows a result's pictures, legend and report ({ width, height, pictures, legend, report }:
+ * the worker's, or the last one's kept across a reload, which has no cloud).
+ */
+export function showPictures(result) {
   const { width, height } = result;
   page.workingSize = [width, height];
   const draw = (id, rgba) => {
@@ -23,10 +35,7 @@ export async function showResult(result) {
   drawLegend(result.legend);
   $('superpixel-count').textContent = result.report.superpixels.toLocaleString('en');
   fillSummary(result.report);
-  page.points = result.cloud.count;
-  $('soup-mode').value = 'organised';
   $('results').hidden = false;
-  await showCloud(result.cloud);
 }
 
 function drawLegend(legend) {

@@ -94,9 +94,11 @@ export async function run({ resizeSecond = false, restored = false } = {}) {
     fail(e.message);
     return;
   }
-  const current = begin('Starting…');
+  const current = begin(restored ? 'Restoring your last result…' : 'Starting…');
   resetProgress();
-  $('results').hidden = true;
+  if (!restored) {
+    $('results').hidden = true; // a restored result shows its kept outputs meanwhile
+  }
   resetTruth();
   const started = performance.now();
   try {
@@ -129,7 +131,7 @@ export async function run({ resizeSecond = false, restored = false } = {}) {
     setState('done');
     await scorePending();
     if (current()) {
-      await saveSession(result.report);
+      await saveSession(result);
     }
   } catch (e) {
     if (e instanceof CancelledError || !current()) {
