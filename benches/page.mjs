@@ -2,14 +2,16 @@
 // result is shown (decode, worker, pipeline in wasm, pictures, 3D view), with default
 // parameters, and the peak memory of the tab; plus how fast the page and its worker load.
 //
-//   node benches/page.mjs [--runs 3]
+//   node benches/page.mjs [--runs 3] [--no-loading]
 //
 // Needs the release wasm in www/pkg (scripts/build-web.sh); builds the `soup` CLI (release) to
 // render the inputs with `soup synth`:
 // - 1024×436: the street scene as PNGs (the paper's Sintel size; nothing is downscaled);
 // - 4032×3024: the street rendered at 1008×756 and upscaled 4× in the browser to JPEGs
-//   (quality 0.92), like a phone's 12-megapixel photos; the page downscales them to the working
-//   size (long side 1024).
+//   (quality 0.92), like a phone's 12-megapixel photos; the page decodes them to the working
+//   size (long side 1024);
+// - 6000×4000 (24 megapixels): the street rendered at 1500×1000, upscaled 4× the same way.
+// `--no-loading` skips the page-load rows (the memory and end-to-end rows only).
 // Each run uses a fresh browser. Times are the minimum over runs; memory is the largest peak
 // resident size (VmHWM) of the renderer process, the tab with its worker (the GPU process, which
 // rasterises with SwiftShader here, is apart), over runs.
@@ -26,7 +28,9 @@ import path from 'node:path';
 import { parseArgs } from 'node:util';
 import { ROOT, launchBrowser, startServer } from '../tests/e2e/browser.mjs';
 
-const { values } = parseArgs({ options: { runs: { type: 'string', default: '3' } } });
+const { values } = parseArgs({
+  options: { runs: { type: 'string', default: '3' }, 'no-loading': { type: 'boolean', default: false } },
+});
 const runs = Number(values.runs);
 
 const work = mkdtempSync(path.join(tmpdir(), 'soup-page-bench-'));
@@ -41,6 +45,7 @@ const soup = (...args) => {
 };
 soup('synth', path.join(work, 'small'), '--scene', 'street', '--size', '1024x436');
 soup('synth', path.join(work, 'photo'), '--scene', 'street', '--size', '1008x756');
+soup('synth', path.join(work, 'photo24'), '--scene', 'street', '--size', '1500x1000');
 const png = (dir, name) => readFileSync(path.join(work, dir, 'street', name));
 
 const server = await startServer();
@@ -169,12 +174,14 @@ try {
     const browser = await launchBrowser();
     const page = await browser.newPage();
     await page.goto(`${server.url}www/favicon.svg`);
-    const jpegs = await upscaleToJpeg(page, [png('photo', 'frame1.png'), png('photo', 'frame2.png')], 4032, 3024);
+    for (const [dir, width, height, label] of [['photo', 4032, 3024, '12 MP'], ['photo24', 6000, 4000, '24 MP']]) {
+      const jpegs = await upscaleToJpeg(page, [png(dir, 'frame1.png'), png(dir, 'frame2.png')], width, height);
+      cases.push([
+        `${width}×${height} JPEG pair (${label}, street upscaled; ${(jpegs[0].length / 2 ** 20).toFixed(1)} MB each)`,
+        jpegs.map((buffer, i) => ({ name: `photo${i + 1}.jpg`, mimeType: 'image/jpeg', buffer })),
+      ]);
+    }
     await browser.close();
-    cases.push([
-      `4032×3024 JPEG pair (street, upscaled; ${(jpegs[0].length / 2 ** 20).toFixed(1)} MB each)`,
-      jpegs.map((buffer, i) => ({ name: `photo${i + 1}.jpg`, mimeType: 'image/jpeg', buffer })),
-    ]);
   }
   for (const [name, files] of cases) {
     const results = [];
@@ -193,7 +200,7 @@ try {
     return `${(statSync(file).size / 1024).toFixed(0)} KiB, ${(gz / 1024).toFixed(0)} KiB gzipped`;
   };
   const loadRows = [];
-  for (const [label, network] of NETWORKS) {
+  for (const [label, network] of values['no-loading'] ? [] : NETWORKS) {
     for (const [module, name] of [['lean', 'soup_worker'], ['full', 'superpixel_soup']]) {
       const loads = [];
       for (let run = 0; run < runs; run++) {
@@ -207,10 +214,12 @@ try {
   console.log('| input | working size | end to end (pick → result shown) | pipeline stages in wasm | peak tab memory (renderer VmHWM) | worker wasm memory |');
   console.log('| --- | --- | --- | --- | --- | --- |');
   console.log(rows.join('\n'));
-  console.log(`\nFirst load (empty cache, gzip from scripts/serve.py), minimum of ${runs}\n`);
-  console.log('| network | worker module | page ready (worker loaded) | 3D viewer ready | worker start | worker restart (cancel) |');
-  console.log('| --- | --- | --- | --- | --- | --- |');
-  console.log(loadRows.join('\n'));
+  if (loadRows.length > 0) {
+    console.log(`\nFirst load (empty cache, gzip from scripts/serve.py), minimum of ${runs}\n`);
+    console.log('| network | worker module | page ready (worker loaded) | 3D viewer ready | worker start | worker restart (cancel) |');
+    console.log('| --- | --- | --- | --- | --- | --- |');
+    console.log(loadRows.join('\n'));
+  }
 } finally {
   await server.close();
   rmSync(work, { recursive: true, force: true });

@@ -105,6 +105,38 @@ pub fn depth_legend((lo, hi): (f32, f32), steps: usize) -> DepthLegend {
     DepthLegend { colours, depths }
 }
 
+/// Relative errors at or above this share of the true depth get the last colour of
+/// [`relative_error_picture`].
+pub const RELATIVE_ERROR_MAX: f32 = 0.5;
+
+/// Colour of a relative depth error `e` (0 = exact): Turbo from dark blue (0) to dark red
+/// ([`RELATIVE_ERROR_MAX`] and above); unknown (NaN) is black.
+pub fn relative_error_colour(e: f32) -> [u8; 3] {
+    if e.is_finite() {
+        turbo(0.08 + 0.87 * (e / RELATIVE_ERROR_MAX).clamp(0.0, 1.0))
+    } else {
+        [0, 0, 0]
+    }
+}
+
+/// A picture of per-pixel relative depth errors (see [`relative_error_colour`]).
+pub fn relative_error_picture(errors: &Grid<f32>) -> Frame {
+    errors.map(|&e| relative_error_colour(e))
+}
+
+/// The key of [`relative_error_picture`]: `steps` (at least 2) colours with the error each
+/// stands for, evenly from 0 to [`RELATIVE_ERROR_MAX`].
+pub fn relative_error_legend(steps: usize) -> (Vec<[u8; 3]>, Vec<f32>) {
+    let steps = steps.max(2);
+    let errors: Vec<f32> = (0..steps)
+        .map(|i| RELATIVE_ERROR_MAX * i as f32 / (steps - 1) as f32)
+        .collect();
+    (
+        errors.iter().map(|&e| relative_error_colour(e)).collect(),
+        errors,
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -81,6 +81,23 @@ pub fn depth_metrics(gt: &Grid<f32>, est: &Grid<f32>) -> Result<DepthMetrics> {
     })
 }
 
+/// Per-pixel relative error |z_gt − s·z| / z_gt of `est` against `gt` (same size) with the
+/// scale `s` of [`depth_metrics`] (pass its `scale`), the quantity whose mean is the MRE; NaN
+/// where either depth is not valid.
+pub fn relative_errors(gt: &Grid<f32>, est: &Grid<f32>, scale: f64) -> Result<Grid<f32>> {
+    gt.check_same_size(est)?;
+    let valid = |z: f32| z.is_finite() && z > 0.0;
+    let (w, h) = gt.size();
+    Ok(Grid::from_fn(w, h, |x, y| {
+        let (g, e) = (*gt.get(x, y), *est.get(x, y));
+        if valid(g) && valid(e) {
+            ((g as f64 - scale * e as f64).abs() / g as f64) as f32
+        } else {
+            f32::NAN
+        }
+    }))
+}
+
 /// Flow accuracy of an estimate against ground truth.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct FlowMetrics {
@@ -246,6 +263,19 @@ mod tests {
         let none = Grid::filled(3, 1, f32::NAN);
         assert!(depth_metrics(&gt, &none).is_err());
         assert!(depth_metrics(&gt, &Grid::filled(2, 1, 1.0)).is_err());
+    }
+
+    #[test]
+    fn relative_errors_average_to_the_mre() {
+        let gt = Grid::from_vec(4, 1, vec![1.0, 2.0, 4.0, 1.0]).unwrap();
+        let est = Grid::from_vec(4, 1, vec![1.0, 2.0, 2.0, f32::NAN]).unwrap();
+        let m = depth_metrics(&gt, &est).unwrap();
+        let errors = relative_errors(&gt, &est, m.scale).unwrap();
+        assert_eq!(&errors.data()[..3], &[0.0, 0.0, 0.5]);
+        assert!(errors.data()[3].is_nan());
+        let mean = errors.data().iter().filter(|e| e.is_finite()).sum::<f32>() / 3.0;
+        assert!((mean as f64 - m.mre).abs() < 1e-6);
+        assert!(relative_errors(&gt, &Grid::filled(3, 1, 1.0), 1.0).is_err());
     }
 
     #[test]

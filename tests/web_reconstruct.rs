@@ -6,8 +6,10 @@
 
 use js_sys::Function;
 use superpixel_soup::Params;
+use superpixel_soup::eval::depth_metrics;
 use superpixel_soup::flow::Preset;
-use superpixel_soup::formats::ply;
+use superpixel_soup::formats::{dpt, flo, pfm, ply};
+use superpixel_soup::image::resize;
 use superpixel_soup::image::{Frame, encode_png};
 use superpixel_soup::input::DEFAULT_MAX_SIDE;
 use superpixel_soup::synth::{SceneKind, render};
@@ -71,7 +73,7 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
             }
         },
     );
-    let result = reconstruct(
+    let mut result = reconstruct(
         builder(&scene.frame1),
         builder(&scene.frame2),
         &options(r#"{"maxSide": 128}"#),
@@ -239,4 +241,88 @@ fn a_failed_allocation_is_remembered() {
         .count();
     assert!(failed > 0);
     assert_eq!(failed_allocation(), Some(SIZE as f64));
+}
+
+#[wasm_bindgen_test]
+fn ground_truth_is_scored_with_the_eval_metrics_and_added_to_the_report() {
+    let scene = render(SceneKind::Street, 160, 68).unwrap();
+    let mut result = run(&scene.frame1, &scene.frame2, &options("{}")).unwrap();
+    // The result's own depth scores 0 (up to scale), as PFM and as Sintel .dpt.
+    let own = pfm::decode(&result.export_file("depth.pfm").unwrap()).unwrap();
+    let score: serde_json::Value = serde_json::from_str(
+        &result
+            .score_depth("own.dpt", &dpt::encode(&own), None)
+            .unwrap(),
+    )
+    .unwrap();
+    assert!(score["metrics"]["mre"].as_f64().unwrap() < 1e-6, "{score}");
+    assert_eq!(score["legend"]["colours"].as_array().unwrap().len(), 64);
+    assert_eq!(result.error_picture().unwrap().len(), 4 * 160 * 68);
+    // The true depth: the metrics of soup eval, and the report carries them.
+    let truth = pfm::encode(&scene.depth1);
+    let score: serde_json::Value =
+        serde_json::from_str(&result.score_depth("depth1.pfm", &truth, None).unwrap()).unwrap();
+    // (serde_json reads floats back to within an ulp or so.)
+    let metric = |name: &str| score["metrics"][name].as_f64().unwrap();
+    let eval = depth_metrics(&scene.depth1, &own).unwrap();
+    let mre = metric("mre");
+    assert!((mre - eval.mre).abs() < 1e-12, "{mre} vs {}", eval.mre);
+    assert!((metric("abs_rel") - eval.abs_rel).abs() < 1e-12);
+    assert!((metric("delta_125") - eval.delta_125).abs() < 1e-12);
+    let flow: serde_json::Value = serde_json::from_str(
+        &result
+            .score_flow("flow12.flo", &flo::encode(&scene.flow12))
+            .unwrap(),
+    )
+    .unwrap();
+    assert!(flow["metrics"]["epe"].as_f64().unwrap() > 0.0);
+    let report: serde_json::Value =
+        serde_json::from_slice(&result.export_file("report.json").unwrap()).unwrap();
+    assert_eq!(report["ground_truth"]["depth"]["file"], "depth1.pfm");
+    assert_eq!(report["ground_truth"]["depth"]["metrics"]["mre"], mre);
+    assert!(report["ground_truth"]["flow"]["metrics"]["epe"].is_number());
+    // A depth of another size, or not a depth file: named errors; the scores stay.
+    let small = pfm::encode(&resize(&scene.frame1, 80, 34).map(|_| 1.0f32));
+    let (name, message) =
+        name_and_message(result.score_depth("small.pfm", &small, None).unwrap_err());
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("80×34 but frame 1 is 160×68"), "{message}");
+    let (name, _) = name_and_message(result.score_depth("x.pfm", b"junk", None).unwrap_err());
+    assert_eq!(name, "FormatError");
+    let report: serde_json::Value = serde_json::from_str(&result.report().unwrap()).unwrap();
+    assert_eq!(report["ground_truth"]["depth"]["metrics"]["mre"], mre);
+}
+
+#[wasm_bindgen_test]
+fn frames_decoded_smaller_keep_the_photos_size_for_outputs_and_checks() {
+    let scene = render(SceneKind::Street, 160, 68).unwrap();
+    let half = |f: &Frame| resize(f, 80, 34);
+    let mut result = run(
+        &half(&scene.frame1),
+        &half(&scene.frame2),
+        &options(r#"{"photoSizes": [[160, 68], [160, 68]]}"#),
+    )
+    .unwrap();
+    assert_eq!((result.width(), result.height()), (80, 34));
+    let report: serde_json::Value = serde_json::from_str(&result.report().unwrap()).unwrap();
+    assert_eq!(report["input_size"], serde_json::json!([160, 68]));
+    let depth = pfm::decode(&result.export_file("depth.pfm").unwrap()).unwrap();
+    assert_eq!(depth.size(), (160, 68));
+    let flow = flo::decode(&result.export_file("flow.flo").unwrap()).unwrap();
+    assert_eq!(flow.size(), (160, 68));
+    // Photos of different sizes are told apart by their own sizes.
+    let (name, message) = name_and_message(
+        run(
+            &half(&scene.frame1),
+            &half(&scene.frame2),
+            &options(r#"{"photoSizes": [[160, 68], [320, 136]]}"#),
+        )
+        .err()
+        .unwrap(),
+    );
+    assert_eq!(name, "SizeMismatchError");
+    assert!(
+        message.contains("160×68") && message.contains("320×136"),
+        "{message}"
+    );
 }

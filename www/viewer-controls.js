@@ -5,11 +5,15 @@
 
 const $ = (id) => document.getElementById(id);
 
-/** Connects the controls above to `viewer` (a wasm Viewer). */
+/**
+ * Connects the controls above to `viewer`: a wasm Viewer, or a function returning the one in
+ * use (the page replaces its viewer when the GPU is lost; the controls follow).
+ */
 export function wireViewerControls(viewer) {
+  const current = typeof viewer === 'function' ? viewer : () => viewer;
   const morph = $('morph');
   const setMorph = (t) => {
-    viewer.setMorph(t);
+    current()?.setMorph(t);
     morph.value = String(t);
     for (const radio of document.querySelectorAll('input[name="frame"]')) {
       radio.checked = (radio.value === '1' && t === 0) || (radio.value === '2' && t === 1);
@@ -39,11 +43,15 @@ export function wireViewerControls(viewer) {
     playing = requestAnimationFrame(step);
   });
 
-  $('point-size').addEventListener('input', () => viewer.setPointSize(Number($('point-size').value)));
-  $('colour-mode').addEventListener('change', () => viewer.setColourMode($('colour-mode').value));
-  $('reset').addEventListener('click', () => viewer.resetView());
+  $('point-size').addEventListener('input', () => current()?.setPointSize(Number($('point-size').value)));
+  $('colour-mode').addEventListener('change', () => current()?.setColourMode($('colour-mode').value));
+  $('reset').addEventListener('click', () => current()?.resetView());
   $('screenshot').addEventListener('click', async () => {
-    const png = await viewer.screenshot();
+    const shown = current();
+    if (!shown) {
+      return;
+    }
+    const png = await shown.screenshot();
     const url = URL.createObjectURL(new Blob([png], { type: 'image/png' }));
     const link = document.createElement('a');
     link.href = url;

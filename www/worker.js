@@ -11,6 +11,10 @@
 //       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below)
 //   { type: 'cloud', soup: 'organised' | 'unorganised' }    → { cloud }
 //   { type: 'export', name }                                → { bytes: ArrayBuffer, mediaType }
+//   { type: 'score-depth', name, bytes, pngScale }          → { score, picture: RGBA at the
+//       working size } (ground-truth depth of frame 1: PFM, .dpt or 16-bit PNG; see
+//       src/web/ground_truth.rs)
+//   { type: 'score-flow', name, bytes }                     → { score } (ground-truth .flo)
 // Unasked: { type: 'ready', version, defaults } once the module is loaded; { type: 'failed',
 // message } when it cannot be loaded.
 // Errors: { type: 'error', id, name, message, fatal }. `fatal` means the wasm instance aborted
@@ -113,6 +117,14 @@ function handle(message) {
       const bytes = result.exportFile(message.name);
       return [{ bytes: bytes.buffer, mediaType: result.exportMediaType(message.name) }, [bytes.buffer]];
     }
+    case 'score-depth': {
+      const result = needResult();
+      const score = JSON.parse(result.scoreDepth(message.name, new Uint8Array(message.bytes), message.pngScale ?? undefined));
+      const picture = result.errorPicture();
+      return [{ score, picture }, [picture.buffer]];
+    }
+    case 'score-flow':
+      return [{ score: JSON.parse(needResult().scoreFlow(message.name, new Uint8Array(message.bytes))) }];
     default:
       throw new Error(`unknown request ${message.type}`);
   }

@@ -1,7 +1,7 @@
 //! The evaluation case layout (the public cases [`crate::eval::eval_case_dir`] finds are in it,
 //! and `soup synth` writes it): a folder holding
 //! `frame1.png`, `frame2.png`, optional `intrinsics.txt` (`fx fy cx cy`), `depth1.pfm`
-//! (z-depth of frame 1, NaN = unknown) and `flow12.flo`. Our synthetic scenes add
+//! (z-depth of frame 1, NaN = unknown; or `depth1.dpt`, MPI Sintel's format) and `flow12.flo`. Our synthetic scenes add
 //! `moving1.png` (255 where the surface moves in the world) and `groups1.png` (motion group per
 //! pixel: 0 = static world, 1.. = each independent motion).
 
@@ -13,7 +13,7 @@ use crate::flow::FlowField;
 use crate::grid::Grid;
 use crate::image::{Frame, decode_image, encode_png};
 
-use super::{flo, pfm, png16, read_file, write_file};
+use super::{dpt, flo, pfm, png16, read_file, write_file};
 
 /// One evaluation case: two frames and whatever ground truth it has.
 #[derive(Clone, Debug)]
@@ -44,7 +44,10 @@ pub fn read_case(dir: &Path) -> Result<Case> {
     let intrinsics = optional(dir, "intrinsics.txt", |b| {
         Intrinsics::parse(&String::from_utf8_lossy(b))
     })?;
-    let depth1 = optional(dir, "depth1.pfm", pfm::decode)?;
+    let depth1 = match optional(dir, "depth1.pfm", pfm::decode)? {
+        Some(depth) => Some(depth),
+        None => optional(dir, "depth1.dpt", dpt::decode)?,
+    };
     let flow12 = optional(dir, "flow12.flo", flo::decode)?;
     let moving1 = optional(dir, "moving1.png", |b| {
         Ok(png16::decode(b)?.0.map(|&v| v > 0))
@@ -189,6 +192,18 @@ mod tests {
         assert_eq!(back.flow12, case.flow12);
         assert_eq!(back.moving1, case.moving1);
         assert_eq!(back.groups1, case.groups1);
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn a_sintel_dpt_depth_is_read_when_there_is_no_pfm() {
+        let dir = temp_dir("dpt");
+        let case = sample_case();
+        write_case(&dir, &case).unwrap();
+        std::fs::remove_file(dir.join("depth1.pfm")).unwrap();
+        let depth = case.depth1.as_ref().unwrap();
+        write_file(&dir.join("depth1.dpt"), &dpt::encode(depth)).unwrap();
+        assert_eq!(read_case(&dir).unwrap().depth1.as_ref(), Some(depth));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

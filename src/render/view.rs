@@ -129,6 +129,15 @@ impl View {
         self.reset_view();
     }
 
+    /// Puts the camera where `camera` says (e.g. the camera of an earlier viewer of the same
+    /// cloud); the field of view stays this view's.
+    pub fn set_camera(&mut self, camera: Camera) {
+        self.camera = Camera {
+            fov_y: self.fov_y,
+            ..camera
+        };
+    }
+
     /// Draws at most `budget` points (at least 1); larger clouds are decimated
     /// ([`decimate`]).
     pub fn set_point_budget(&mut self, budget: usize) {
@@ -343,6 +352,23 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+
+    #[test]
+    fn a_camera_carries_over_to_another_view_of_the_same_cloud() {
+        let mut one = View::default();
+        one.set_cloud(two_point_cloud(None));
+        one.set_viewport(400, 300, 1.0);
+        one.pointer_down(1, 100.0, 100.0, Drag::Orbit);
+        one.pointer_move(1, 160.0, 120.0);
+        one.pointer_up(1);
+        let mut two = View::default();
+        two.set_cloud(two_point_cloud(None));
+        two.set_viewport(400, 300, 1.0);
+        assert_ne!(two.camera(), one.camera());
+        two.set_camera(*one.camera());
+        assert_eq!(two.camera(), one.camera());
+        assert_eq!(two.uniforms().to_bytes(), one.uniforms().to_bytes());
+    }
 
     fn two_point_cloud(labels: Option<&[u32]>) -> PointCloud {
         PointCloud::new(

@@ -7,6 +7,8 @@
 //! - this file: `version`, `decodeImageInfo`
 //! - [`reconstruct`]: the pipeline for the page's Web Worker (`reconstruct`, `readExif`,
 //!   `resolveIntrinsics`, `pageDefaults`) and the result's pictures, clouds and export files
+//! - [`ground_truth`]: scores of the result against the user's ground truth (`scoreDepth`,
+//!   `scoreFlow`, `errorPicture`)
 //! - [`memory`]: out-of-memory reporting (`failedAllocation`, `memoryBytes`)
 //! - `flow`: `computeFlow`
 //! - [`superpixels`]: SLIC for the page (`computeSuperpixels`)
@@ -18,6 +20,7 @@ use wasm_bindgen::prelude::*;
 use crate::image::Frame;
 
 mod flow;
+pub mod ground_truth;
 pub mod memory;
 pub mod reconstruct;
 #[cfg(feature = "viewer")]

@@ -21,10 +21,13 @@
 //! `TooSmallError`, `NoParallaxError`, `InvalidParameterError`, `DecodeError`, `FormatError`)
 //! and whose message is the library's readable one.
 
+use std::borrow::Cow;
+
 use js_sys::Function;
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
 
+use super::ground_truth::GroundTruthScores;
 use super::rgba;
 use crate::camera::{Intrinsics, resolve_intrinsics};
 use crate::colormap::{depth_legend, depth_picture, inverse_depth_range};
@@ -35,7 +38,7 @@ use crate::flow::{FlowParams, Preset};
 use crate::formats::ply::Encoding;
 use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
 use crate::input::{DEFAULT_MAX_SIDE, MIN_SIDE, prepare_pair};
-use crate::output::{cloud_labels, dense_depth, point_clouds};
+use crate::output::{cloud_labels, dense_depth, depth_at, point_clouds};
 use crate::pipeline::{FlowInput, Params, Reconstruction, Stage};
 use crate::superpixels::view::boundary_overlay;
 
@@ -59,6 +62,11 @@ pub struct RunOptions {
     pub exif2: ExifInfo,
     /// When the frames differ in size, resize frame 2 to frame 1's size instead of failing.
     pub resize_second: bool,
+    /// The photos' own sizes `[[w1, h1], [w2, h2]]` when the page decoded them straight to the
+    /// working size (to save memory): the size check, the user's intrinsics (in the photos'
+    /// pixels) and the outputs at the input size (depth, flow) follow these; `null` when the
+    /// frames are the photos as they are.
+    pub photo_sizes: Option<[[usize; 2]; 2]>,
 }
 
 impl Default for RunOptions {
@@ -71,6 +79,7 @@ impl Default for RunOptions {
             exif1: ExifInfo::default(),
             exif2: ExifInfo::default(),
             resize_second: false,
+            photo_sizes: None,
         }
     }
 }
@@ -197,10 +206,29 @@ pub fn reconstruct(
         .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))?;
     let frame1 = frame1.finish().map_err(js_error)?;
     let mut frame2 = frame2.finish().map_err(js_error)?;
+    let mut intrinsics = options.intrinsics;
+    let mut photo_size = None;
+    if let Some([[w1, h1], [w2, h2]]) = options.photo_sizes {
+        if (w1, h1) != (w2, h2) && !options.resize_second {
+            return Err(js_error(Error::SizeMismatch { w1, h1, w2, h2 }));
+        }
+        if w1 == 0 || h1 == 0 {
+            return Err(js_error(Error::InvalidParameter(
+                "photo sizes must be positive".into(),
+            )));
+        }
+        // The user's intrinsics are in the photo's pixels; the frames are smaller.
+        let (sx, sy) = (
+            frame1.width() as f64 / w1 as f64,
+            frame1.height() as f64 / h1 as f64,
+        );
+        intrinsics = intrinsics.map(|k| k.scaled(sx, sy));
+        photo_size = Some((w1, h1));
+    }
     if options.resize_second && frame2.size() != frame1.size() {
         frame2 = resize(&frame2, frame1.width(), frame1.height());
     }
-    let pair = prepare_pair(
+    let mut pair = prepare_pair(
         LoadedImage {
             frame: frame1,
             exif: options.exif1,
@@ -209,10 +237,18 @@ pub fn reconstruct(
             frame: frame2,
             exif: options.exif2,
         },
-        options.intrinsics,
+        intrinsics,
         options.max_side,
     )
     .map_err(js_error)?;
+    let photo_size = photo_size.filter(|&size| size != pair.input_size);
+    if let Some((w, h)) = photo_size {
+        let (ww, wh) = pair.frame1.size();
+        pair.notes.retain(|n| !n.starts_with("downscaled from"));
+        pair.notes.push(format!(
+            "downscaled from {w}×{h} to {ww}×{wh} (by the browser, as it decoded the photos)"
+        ));
+    }
     let mut report = |stage: Stage, fraction: f32| {
         if let Some(callback) = &progress {
             // A throwing callback must not abort the reconstruction.
@@ -224,10 +260,18 @@ pub fn reconstruct(
         }
     };
     let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
-    let rec = crate::reconstruct(&pair, flow, &options.params, &mut report).map_err(js_error)?;
+    let mut rec =
+        crate::reconstruct(&pair, flow, &options.params, &mut report).map_err(js_error)?;
+    // The outputs at the input size (depth files, flow.flo, the ground-truth scores) are at the
+    // photo's size, as if the library had downscaled it; the depth at that size is made when
+    // asked for (a 12-megapixel depth map is 48 MB of wasm memory the run itself does not need).
+    if let Some(size) = photo_size {
+        rec.report.input_size = size;
+    }
     Ok(PageReconstruction {
         frame1: pair.frame1,
         rec,
+        ground_truth: GroundTruthScores::default(),
     })
 }
 
@@ -235,11 +279,48 @@ pub fn reconstruct(
 #[wasm_bindgen]
 pub struct PageReconstruction {
     /// The reference frame at the working resolution.
-    frame1: Frame,
-    rec: Reconstruction,
+    pub(super) frame1: Frame,
+    pub(super) rec: Reconstruction,
+    /// Scores against the user's ground truth ([`super::ground_truth`]), added to the report.
+    pub(super) ground_truth: GroundTruthScores,
 }
 
 impl PageReconstruction {
+    /// Frame-1 depth at the input size (the photo's): the reconstruction's own, or, when the page
+    /// decoded the photos at the working size, the soup's depth rendered at the photo's size
+    /// with the intrinsics scaled to it.
+    pub(super) fn depth_at_input(&self) -> Cow<'_, crate::Grid<f32>> {
+        let rec = &self.rec;
+        let (iw, ih) = rec.report.input_size;
+        if rec.depth_input.size() == (iw, ih) {
+            return Cow::Borrowed(&rec.depth_input);
+        }
+        let (w, h) = self.frame1.size();
+        let k = rec
+            .report
+            .camera
+            .intrinsics
+            .scaled(iw as f64 / w as f64, ih as f64 / h as f64);
+        Cow::Owned(depth_at(&rec.soup, &rec.superpixels.labels, iw, ih, &k))
+    }
+
+    /// `report.json`: the library's report, with the ground-truth scores when there are any.
+    fn report_bytes(&self) -> crate::Result<Vec<u8>> {
+        let bytes = export::report_json(&self.rec)?;
+        if self.ground_truth.is_empty() {
+            return Ok(bytes);
+        }
+        let json = |e: serde_json::Error| Error::format("JSON", e.to_string());
+        let mut report: serde_json::Value = serde_json::from_slice(&bytes).map_err(json)?;
+        if let Some(object) = report.as_object_mut() {
+            object.insert(
+                "ground_truth".into(),
+                serde_json::to_value(&self.ground_truth).map_err(json)?,
+            );
+        }
+        serde_json::to_vec_pretty(&report).map_err(json)
+    }
+
     /// Frame-1 depth of the unit-scale soup (every superpixel at λ = 1, before the scale solve).
     fn unorganised_depth(&self) -> crate::Grid<f32> {
         let rec = &self.rec;
@@ -332,18 +413,32 @@ impl PageReconstruction {
     }
 
     /// The report (intrinsics and their source, sizes, parameters, milliseconds per stage,
-    /// counts, energies) as JSON, as `report.json` of the CLI.
+    /// counts, energies) as JSON, as `report.json` of the CLI, plus `ground_truth` (the scores
+    /// of [`super::ground_truth`]) once the user has scored the result.
     pub fn report(&self) -> Result<String, JsError> {
-        let bytes = export::report_json(&self.rec)?;
-        Ok(String::from_utf8(bytes)?)
+        Ok(String::from_utf8(self.report_bytes()?)?)
     }
 
     /// The bytes of an output file by name (`frame1.ply`, `frame2.ply`, `depth16.png`,
     /// `flow.flo`, `report.json`, `depth.pfm`, `depth.png`, `labels.png`), exactly as
     /// `soup reconstruct --out` writes it (binary PLY).
     #[wasm_bindgen(js_name = exportFile)]
-    pub fn export_file(&self, name: &str) -> Result<Vec<u8>, JsError> {
+    pub fn export_file(&mut self, name: &str) -> Result<Vec<u8>, JsError> {
         let file = ExportFile::from_file_name(name)?;
+        if file == ExportFile::Report {
+            return Ok(self.report_bytes()?);
+        }
+        let depth_file = matches!(
+            file,
+            ExportFile::DepthPfm | ExportFile::DepthPng16 | ExportFile::DepthPicture
+        );
+        if depth_file && let Cow::Owned(depth) = self.depth_at_input() {
+            // Encoded with the photo-size depth in place, then the working-size one back.
+            let working = std::mem::replace(&mut self.rec.depth_input, depth);
+            let bytes = export::encode(&self.rec, file, Encoding::BinaryLittleEndian);
+            self.rec.depth_input = working;
+            return Ok(bytes?);
+        }
         Ok(export::encode(
             &self.rec,
             file,
@@ -418,7 +513,7 @@ impl CloudBuffers {
 
 /// A JavaScript `Error` carrying the library's message, named after the kind of problem so the
 /// page can react (e.g. offer to resize frame 2 on `SizeMismatchError`).
-fn js_error(error: Error) -> JsValue {
+pub(super) fn js_error(error: Error) -> JsValue {
     let name = match &error {
         Error::Io { .. } => "IoError",
         Error::Decode(_) => "DecodeError",

@@ -160,6 +160,11 @@ impl Viewer {
             resize_observer: None,
         };
         viewer.observe_resizes();
+        let weak = Rc::downgrade(&viewer.inner);
+        let target: EventTarget = canvas.clone().into();
+        viewer.listen(&target, "webglcontextlost", &weak, |inner, _| {
+            inner.gpu.mark_lost()
+        });
         if options.controls {
             viewer.attach_controls(&canvas);
         }
@@ -329,6 +334,50 @@ impl Viewer {
         inner.request_frame();
     }
 
+    /// The camera as `[targetX, targetY, targetZ, distance, yaw, pitch]` (radians), for
+    /// [`setCamera`](Viewer::set_camera) on another viewer of the same cloud (e.g. after the GPU
+    /// was lost).
+    #[wasm_bindgen(getter)]
+    pub fn camera(&self) -> Vec<f32> {
+        let c = *self.inner.borrow().view.camera();
+        vec![
+            c.target.x, c.target.y, c.target.z, c.distance, c.yaw, c.pitch,
+        ]
+    }
+
+    /// Puts the camera where [`camera`](Viewer::camera) said (six numbers); call it after
+    /// `setCloud`, which resets the view.
+    #[wasm_bindgen(js_name = setCamera)]
+    pub fn set_camera(&self, camera: &[f32]) -> Result<(), JsError> {
+        let &[x, y, z, distance, yaw, pitch] = camera else {
+            return Err(JsError::new(
+                "a camera is six numbers: target x, y, z, distance, yaw, pitch",
+            ));
+        };
+        if camera.iter().any(|v| !v.is_finite()) || distance <= 0.0 {
+            return Err(JsError::new(
+                "a camera needs finite numbers and a positive distance",
+            ));
+        }
+        self.update(|view| {
+            let mut c = *view.camera();
+            c.target = glam::Vec3::new(x, y, z);
+            c.distance = distance;
+            c.yaw = yaw;
+            c.pitch = pitch;
+            view.set_camera(c);
+            Ok(())
+        })
+    }
+
+    /// True once the GPU device (WebGPU) or the context (WebGL2) is lost: this viewer draws
+    /// nothing more, and the page should open a new one (the event `viewerlost` on `window`,
+    /// or `webglcontextlost` on the canvas, says when).
+    #[wasm_bindgen(getter)]
+    pub fn lost(&self) -> bool {
+        self.inner.borrow().gpu.is_lost()
+    }
+
     /// Draws now (the viewer otherwise redraws by itself on the next animation frame after
     /// each change). Resizes the drawing buffer to the canvas's CSS size × devicePixelRatio.
     pub fn render(&self) {
@@ -338,6 +387,11 @@ impl Viewer {
     /// The current view as PNG bytes (RGB, the drawing buffer's size), rendered off screen.
     #[wasm_bindgen(js_name = screenshot, unchecked_return_type = "Promise<Uint8Array>")]
     pub fn screenshot(&self) -> js_sys::Promise {
+        if self.lost() {
+            return js_sys::Promise::reject(
+                &JsError::new("the 3D view's GPU was lost; open a new viewer").into(),
+            );
+        }
         let pending = {
             let mut inner = self.inner.borrow_mut();
             inner.sync_size();

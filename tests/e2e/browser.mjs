@@ -89,7 +89,8 @@ export function analysePicture(page, source) {
   return page.evaluate(async (source) => {
     let bytes;
     if (source === 'page') {
-      bytes = await (await window.soupPage.viewerReady).screenshot();
+      await window.soupPage.viewerReady;
+      bytes = await window.soupPage.viewer.screenshot(); // the viewer in use (replaced after a GPU loss)
     } else if (source === 'viewer') {
       bytes = await window.viewerDemo.viewer.screenshot();
     } else {

@@ -17,9 +17,13 @@ export const SAMPLE_SIZE = [768, 328];
 /**
  * Opens the page (index.html) with `query` in a new context of `browser` and waits until its
  * worker is ready. Resolves to { page, errors } (errors collects console errors and exceptions).
+ * `initScript` (a function) runs in the page before its own scripts.
  */
-export async function openPage(browser, url, query = '', contextOptions = {}) {
+export async function openPage(browser, url, query = '', contextOptions = {}, initScript = null) {
   const context = await browser.newContext({ viewport: { width: 1100, height: 900 }, ...contextOptions });
+  if (initScript !== null) {
+    await context.addInitScript(initScript);
+  }
   const page = await context.newPage();
   const errors = [];
   page.on('pageerror', (err) => errors.push(err.message));

@@ -24,7 +24,7 @@ use crate::params::{PipelineArgs, all_defaults_help};
 #[derive(clap::Args)]
 #[command(after_long_help = all_defaults_help())]
 pub struct Args {
-    /// Case folders (frame1.png, frame2.png, intrinsics.txt, depth1.pfm, flow12.flo).
+    /// Case folders (frame1.png, frame2.png, intrinsics.txt, depth1.pfm or depth1.dpt, flow12.flo).
     #[arg(required = true)]
     cases: Vec<PathBuf>,
     /// Use the case's ground-truth flow12.flo instead of computed flow (the oracle-flow ablation).
@@ -121,7 +121,7 @@ fn evaluate(
 ) -> Result<(CaseResult, Reconstruction)> {
     let gt = case.depth1.as_ref().ok_or_else(|| {
         Error::InvalidParameter(format!(
-            "case {} has no depth1.pfm to score against",
+            "case {} has no depth1.pfm or depth1.dpt to score against",
             case.name
         ))
     })?;

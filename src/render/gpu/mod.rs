@@ -14,6 +14,7 @@ mod readback;
 
 use std::str::FromStr;
 use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use wasm_bindgen::JsCast;
 use wasm_bindgen_futures::JsFuture;
@@ -24,6 +25,10 @@ use crate::render::{RenderError, Result};
 use super::view::View;
 use points::PointPass;
 pub use readback::{PendingPicture, PendingWork};
+
+/// The event dispatched on `window` when a viewer's GPU device is lost (WebGPU); a lost WebGL2
+/// context fires `webglcontextlost` on the canvas instead.
+pub const LOST_EVENT: &str = "viewerlost";
 
 /// The graphics API in use.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,6 +83,9 @@ pub struct Gpu {
     surface: wgpu::Surface<'static>,
     config: wgpu::SurfaceConfiguration,
     points: PointPass,
+    /// Set once the device is lost (WebGPU's `device.lost`, or the WebGL2 context lost): the
+    /// page must open a new viewer; this one draws nothing more.
+    lost: Arc<AtomicBool>,
     // Kept alive for the surface's sake.
     _instance: wgpu::Instance,
 }
@@ -115,6 +123,17 @@ impl Gpu {
         &self.adapter_name
     }
 
+    /// Whether the device or context is lost (see [`Gpu::mark_lost`]).
+    pub fn is_lost(&self) -> bool {
+        self.lost.load(Ordering::Relaxed)
+    }
+
+    /// Records that the device or context is lost (the WebGL2 canvas said so); nothing is
+    /// drawn or read back from then on.
+    pub fn mark_lost(&self) {
+        self.lost.store(true, Ordering::Relaxed);
+    }
+
     /// Largest width or height of the drawing buffer this device can render.
     pub fn max_size(&self) -> u32 {
         self.device.limits().max_texture_dimension_2d
@@ -128,6 +147,9 @@ impl Gpu {
     /// Resizes the canvas's surface to `width` × `height` pixels (clamped to [1, max_size]);
     /// does nothing when the size is unchanged.
     pub fn resize(&mut self, width: u32, height: u32) {
+        if self.is_lost() {
+            return;
+        }
         let max = self.max_size();
         let (width, height) = (width.clamp(1, max), height.clamp(1, max));
         if (width, height) != (self.config.width, self.config.height) {
@@ -140,6 +162,9 @@ impl Gpu {
     /// Draws `view` into the canvas. A frame the browser cannot give (the canvas was lost or
     /// hidden) is skipped; the next call tries again.
     pub fn render(&mut self, view: &View) {
+        if self.is_lost() {
+            return;
+        }
         let texture = match self.surface.get_current_texture() {
             wgpu::CurrentSurfaceTexture::Success(t)
             | wgpu::CurrentSurfaceTexture::Suboptimal(t) => t,
@@ -304,6 +329,17 @@ fn finish_opening(
     }
     surface.configure(&device, &config);
     let points = PointPass::new(&device);
+    let lost = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&lost);
+    device.set_device_lost_callback(move |_reason, _message| {
+        flag.store(true, Ordering::Relaxed);
+        // Tell the page (the callback may not hold the canvas): it opens a new viewer.
+        if let Some(window) = web_sys::window()
+            && let Ok(event) = web_sys::Event::new(LOST_EVENT)
+        {
+            let _ = window.dispatch_event(&event);
+        }
+    });
     Ok(Gpu {
         backend,
         adapter_name: adapter.get_info().name,
@@ -312,6 +348,7 @@ fn finish_opening(
         surface,
         config,
         points,
+        lost,
         _instance: instance,
     })
 }

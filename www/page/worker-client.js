@@ -1,0 +1,170 @@
+// The worker client and progress: starts the pipeline's Web Worker (www/pipeline.js, which runs
+// www/worker.js with the lean wasm module), shows the progress of a run per stage, runs the
+// reconstruction on the current frames and cancels it (by restarting the worker).
+
+import { CancelledError, Pipeline } from '../pipeline.js';
+import { $, WORKER_MODULE, begin, fail, page, sentence, setState, setStatus, showAlert } from './ui.js';
+import { fillForm, readOptions } from './params.js';
+import { pixelsForRun } from './input.js';
+import { fillTimings, showResult } from './results.js';
+import { resetTruth, scorePending } from './groundtruth.js';
+import { saveSession } from './persist.js';
+
+/** Share of the progress bar per stage (roughly their share of the time on a 1024 × 436 pair). */
+const STAGE_WEIGHTS = { flow: 0.25, superpixels: 0.2, motion: 0.35, scales: 0.15, outputs: 0.05 };
+export const STAGE_LABELS = {
+  flow: 'Optical flow',
+  superpixels: 'Superpixels and graphs',
+  motion: 'Motions and planes (unit-scale soup)',
+  scales: 'Relative scales (ARAP)',
+  outputs: 'Depth and point clouds',
+};
+
+/** Starts the worker; `onFirstReady` runs once, when the page has the library's defaults. */
+export function startPipeline(onFirstReady) {
+  page.pipeline = new Pipeline({
+    onReady: ({ version, defaults, startMs }) => {
+      page.workerStartMs.push(startMs);
+      if (page.defaults === null) {
+        page.readyMs = performance.now(); // since navigation start
+        page.defaults = defaults;
+        $('version').textContent = version;
+        fillForm(defaults.options);
+        buildStageList(defaults.stages);
+        $('run-button').disabled = false;
+        setStatus('Ready. Drop two photos, pick them, or try the sample.');
+        setState('idle');
+        onFirstReady?.();
+      }
+    },
+    onFailed: (message) => {
+      setState('error');
+      setStatus('');
+      showAlert(`The page cannot run here: ${message}. Build the module with ./serve.sh.`);
+    },
+    onProgress: (stage, fraction) => showProgress(stage, fraction),
+  }, WORKER_MODULE);
+  return page.pipeline;
+}
+
+function buildStageList(stages) {
+  $('stages').replaceChildren(...stages.map((stage) => {
+    const item = document.createElement('li');
+    item.dataset.stage = stage;
+    item.innerHTML = '<span class="name"></span><span class="time"></span>';
+    item.querySelector('.name').textContent = STAGE_LABELS[stage] ?? stage;
+    return item;
+  }));
+}
+
+export function resetProgress() {
+  $('progress').value = 0;
+  for (const item of $('stages').children) {
+    item.className = '';
+    item.querySelector('.time').textContent = '';
+  }
+}
+
+function showProgress(stage, fraction) {
+  const items = [...$('stages').children];
+  const index = items.findIndex((item) => item.dataset.stage === stage);
+  const weight = (s) => STAGE_WEIGHTS[s] ?? 1 / items.length;
+  let done = 0;
+  items.forEach((item, i) => {
+    item.className = i < index ? 'done' : i === index ? 'active' : '';
+    if (i < index) {
+      done += weight(item.dataset.stage);
+    }
+  });
+  const total = items.reduce((sum, item) => sum + weight(item.dataset.stage), 0);
+  $('progress').value = Math.min(1, (done + weight(stage) * fraction) / total);
+  setStatus(`${STAGE_LABELS[stage] ?? stage}…`);
+}
+
+/** Runs the reconstruction on the current frames with the form's options. */
+export async function run({ resizeSecond = false, restored = false } = {}) {
+  if (page.frames.length !== 2) {
+    fail('Two images are needed: drop or pick two photos of the same scene (or a video).');
+    return;
+  }
+  let options;
+  try {
+    options = readOptions(resizeSecond);
+  } catch (e) {
+    fail(e.message);
+    return;
+  }
+  const current = begin(restored ? 'Restoring your last result…' : 'Starting…');
+  resetProgress();
+  if (!restored) {
+    $('results').hidden = true; // a restored result shows its kept outputs meanwhile
+  }
+  resetTruth();
+  const started = performance.now();
+  try {
+    const bitmaps = await Promise.all(page.frames.map(pixelsForRun));
+    const { result } = await page.pipeline.request('run', { frames: bitmaps, options }, bitmaps);
+    const received = performance.now();
+    if (!current()) {
+      return;
+    }
+    await showResult(result);
+    const finished = performance.now();
+    page.lastRun = {
+      // From the user's action (files picked, sample clicked, Reconstruct) to the result shown.
+      endToEndMs: finished - page.actionStartedAt,
+      totalMs: finished - started,
+      workerMs: received - started,
+      showMs: finished - received,
+      worker: result.timings,
+      stagesMs: Object.fromEntries(result.report.timings_ms),
+      memoryBytes: result.memoryBytes,
+    };
+    page.actionStartedAt = null;
+    fillTimings(result.report, page.lastRun);
+    $('progress').value = 1;
+    for (const item of $('stages').children) {
+      item.className = 'done';
+    }
+    setStatus(`${restored ? 'Restored your last result (computed again)' : 'Done'} in ` +
+      `${(page.lastRun.totalMs / 1000).toFixed(1)} s: ${result.cloud.count.toLocaleString('en')} points.`);
+    setState('done');
+    await scorePending();
+    if (current()) {
+      await saveSession(result);
+    }
+  } catch (e) {
+    if (e instanceof CancelledError || !current()) {
+      return;
+    }
+    failRun(e);
+  }
+}
+
+/** Explains a failed run (the library's message); a size mismatch offers to resize frame 2. */
+function failRun(error) {
+  const [one] = page.frames;
+  const message = sentence(error.message);
+  switch (error.name) {
+    case 'SizeMismatchError':
+      fail(message, {
+        label: `Resize frame 2 to ${one.width} × ${one.height} and reconstruct`,
+        run: () => run({ resizeSecond: true }),
+      });
+      break;
+    case 'NoParallaxError':
+      fail(`${message}. The two photos must be taken from different positions, or show motion.`);
+      break;
+    default:
+      fail(message);
+  }
+}
+
+export function cancel() {
+  page.action = null;
+  page.actionStartedAt = null;
+  page.pipeline.restart();
+  resetProgress();
+  setStatus('Cancelled.');
+  setState('idle');
+}
