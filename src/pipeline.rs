@@ -53,14 +53,12 @@ impl Stage {
     }
 }
 
-/// Every tunable of the pipeline, with the paper's defaults.
+/// Every tunable of the pipeline with its default (each documented on its own type).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 pub struct Params {
     pub superpixels: SlicParams,
     /// Neighbours in the K-NN graph (local motion hypotheses are fitted on a superpixel and these).
     pub k: usize,
-    /// β of the weights exp(−β ‖s_i − s_k‖) (anchors normalised by the long side).
-    pub beta: f64,
     pub init: InitParams,
     pub scales: ScaleParams,
     pub refine: RefineParams,
@@ -71,7 +69,6 @@ impl Default for Params {
         Params {
             superpixels: SlicParams::default(),
             k: 15,
-            beta: 3.0,
             init: InitParams::default(),
             scales: ScaleParams::default(),
             refine: RefineParams::default(),
@@ -188,7 +185,8 @@ pub fn reconstruct(
     let sp = slic(&pair.frame1, &params.superpixels)?;
     let boundaries = boundary_graph(&sp, &pair.frame1);
     let adjacency = boundaries.adjacency(sp.len());
-    let knn = knn_graph(&sp, params.k, params.beta);
+    // The graph's distance weights are not used by the pipeline (only the neighbour lists).
+    let knn = knn_graph(&sp, params.k, 0.0);
     timings.push((Stage::Superpixels, clock.lap()));
 
     progress(Stage::Motion, 0.0);

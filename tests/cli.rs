@@ -387,7 +387,6 @@ fn help_shows_the_library_defaults() {
         ("--superpixels", params.superpixels.count.to_string()),
         ("--compactness", params.superpixels.compactness.to_string()),
         ("--k", params.k.to_string()),
-        ("--beta", params.beta.to_string()),
     ] {
         let section = help
             .split(&format!("{option} <"))

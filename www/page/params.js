@@ -14,7 +14,9 @@ export const NUMBER_FIELDS = [
   { name: 'count', path: ['params', 'superpixels', 'count'] },
   { name: 'compactness', path: ['params', 'superpixels', 'compactness'] },
   { name: 'k', path: ['params', 'k'] },
-  { name: 'beta', path: ['params', 'beta'] },
+  { name: 'sigma', path: ['params', 'scales', 'sigma'] },
+  { name: 'refineIterations', path: ['params', 'refine', 'iterations'] },
+  { name: 'particles', path: ['params', 'refine', 'particles'] },
 ];
 
 const getPath = (object, path) => path.reduce((o, key) => o?.[key], object);

@@ -64,7 +64,11 @@ function fillSummary(report) {
     ['Superpixels', `${report.superpixels} (${report.degenerate} without a plane of their own)`],
     ['Motion hypotheses', String(report.hypotheses)],
     ['Trusted flow', `${(100 * report.reliable_flow).toFixed(1)} % of pixels`],
-    ['ARAP energy', `${report.arap.energy_start.toPrecision(4)} → ${report.arap.energy_end.toPrecision(4)}`],
+    ['Scale energy', `${report.scales.energy_start.toPrecision(4)} → ${report.scales.energy_end.toPrecision(4)} (${report.scales.segments} rigid segments, ${report.scales.tail_pieces} superpixels taken from their neighbours)`],
+    ['Refinement energy', report.refine === null
+      ? 'off'
+      : `${report.refine.energies[0].toPrecision(4)} → ${report.refine.energies.at(-1).toPrecision(4)} in ${report.refine.energies.length - 1} iterations`],
+    ['Scale unknown', `${report.unconfident} superpixels (no contact pins their scale: their depth relative to the rest is a guess)`],
   ];
   for (const note of report.notes) {
     rows.push(['Note', note]);

@@ -11,12 +11,13 @@ import { resetTruth, scorePending } from './groundtruth.js';
 import { saveSession } from './persist.js';
 
 /** Share of the progress bar per stage (roughly their share of the time on a 1024 × 436 pair). */
-const STAGE_WEIGHTS = { flow: 0.25, superpixels: 0.2, motion: 0.35, scales: 0.15, outputs: 0.05 };
+const STAGE_WEIGHTS = { flow: 0.2, superpixels: 0.15, motion: 0.3, scales: 0.05, refine: 0.25, outputs: 0.05 };
 export const STAGE_LABELS = {
   flow: 'Optical flow',
   superpixels: 'Superpixels and graphs',
   motion: 'Motions and planes (unit-scale soup)',
-  scales: 'Relative scales (ARAP)',
+  scales: 'Relative scales (contacts)',
+  refine: 'Refinement (particle BP, TRW-S)',
   outputs: 'Depth and point clouds',
 };
 

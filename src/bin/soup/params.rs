@@ -29,10 +29,6 @@ pub struct PipelineArgs {
     /// superpixel together with these).
     #[arg(long, default_value_t = Params::default().k)]
     pub k: usize,
-    /// β of the neighbour weights exp(−β ‖s_i − s_k‖), anchors s in units of the image's long
-    /// side: larger ties each superpixel to its nearest neighbours only.
-    #[arg(long, default_value_t = Params::default().beta)]
-    pub beta: f64,
     /// A JSON file setting any pipeline parameters (the shape of `params` in report.json; fields
     /// left out keep their defaults, nested objects are merged). An option above overrides the
     /// file when it differs from its default.
@@ -60,9 +56,6 @@ impl PipelineArgs {
         }
         if self.k != library.k {
             params.k = self.k;
-        }
-        if self.beta != library.beta {
-            params.beta = self.beta;
         }
         Ok(params)
     }
