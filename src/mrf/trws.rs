@@ -8,7 +8,7 @@
 //! Node i's belief is split among the monotonic chains through it with weight
 //! γ_i = 1 / max(edges to earlier nodes, edges to later nodes). On a tree (and so on a chain)
 //! the result is exact; in general it is a good labelling plus a lower bound on the minimum,
-//! computed by minimising every chain of the decomposition exactly ([`Mrf::lower_bound`]).
+//! computed by minimising every chain of the decomposition exactly (`lower_bound`).
 
 /// A pairwise table between nodes `a < b`: `cost[x_a · labels(b) + x_b]`.
 #[derive(Clone, Debug)]

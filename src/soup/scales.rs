@@ -71,7 +71,7 @@ pub struct ScaleParams {
     pub band: f64,
     /// At most this many pixel pairs are used per touching pair of pieces (evenly spaced).
     pub pairs_per_boundary: usize,
-    /// Contact evidence of a pair (see [`contact_evidence`]): flow jump (px) at which the
+    /// Contact evidence of a pair (see `contact_evidence`): flow jump (px) at which the
     /// flow-continuity evidence falls to 1/e.
     pub flow_scale_px: f64,
     /// Smallest contact evidence of a pair (a pair of parallel planes whose flow jumps).
@@ -684,7 +684,7 @@ pub fn gaps(a: &RayPoint, b: &RayPoint) -> [f64; 2] {
 }
 
 /// The weight of boundary pair `j` of `edge`: colour similarity exp(−‖ΔI‖ / colour_scale)
-/// times the [`contact_evidence`] of the two pieces' planes and flow there, times
+/// times the `contact_evidence` of the two pieces' planes and flow there, times
 /// `occluded_weight` where either pixel failed the forward–backward check.
 pub fn pair_weight(
     soup: &Soup,
@@ -765,4 +765,70 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
         })
         .collect();
     (0..n).map(|i| confidence[segment[i]]).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rng::Rng;
+
+    #[test]
+    fn truncated_sums_are_minimised_exactly() {
+        // Against a fine grid on random sums of truncated absolute values.
+        let mut rng = Rng::new(5);
+        for _ in 0..50 {
+            let terms: Vec<(f64, f64)> = (0..7)
+                .map(|_| (rng.uniform() + 0.1, 2.0 * rng.uniform() - 1.0))
+                .collect();
+            let sigma = 0.05 + 0.3 * rng.uniform();
+            let x = minimise_truncated(&terms, sigma, 0.3, -2.0, 2.0);
+            let grid = (0..=40_000)
+                .map(|j| truncated(&terms, -2.0 + j as f64 * 1e-4, sigma))
+                .fold(f64::INFINITY, f64::min);
+            assert!(truncated(&terms, x, sigma) <= grid + 1e-12);
+            assert!((-2.0..=2.0).contains(&x));
+        }
+    }
+
+    #[test]
+    fn gaps_vanish_where_surfaces_meet_and_follow_the_scales() {
+        // The camera moves forward by 1. Piece a: the floor y = 1 (static, so it moves by
+        // (0, 0, −1) in camera coordinates, along its own plane). Piece b: a wall z = 5 that
+        // also slides sideways by 0.3 along the floor. They meet on y = 1, z = 5 in frame 1
+        // and still touch in frame 2 (the wall's foot slid along the floor).
+        let floor = Piece {
+            r: nalgebra::Matrix3::identity(),
+            t_hat: Vector3::new(0.0, 0.0, -1.0),
+            m: Vector3::new(0.0, 1.0, 0.0),
+            lambda: 1.0,
+            hypothesis: 0,
+            degenerate: None,
+        };
+        let motion = Vector3::new(0.3, 0.0, -1.0);
+        let lambda = motion.norm();
+        let wall = Piece {
+            t_hat: motion / lambda,
+            m: Vector3::new(0.0, 0.0, 0.2) * lambda,
+            lambda,
+            hypothesis: 1,
+            ..floor
+        };
+        let ray = Vector3::new(0.1, 0.2, 1.0); // meets y = 1 at z = 5
+        let (a, b) = (
+            ray_point(&floor, &ray).unwrap(),
+            ray_point(&wall, &ray).unwrap(),
+        );
+        let [g1, g2] = gaps(&a, &b);
+        assert!(g1.abs() < 1e-12 && g2.abs() < 1e-12, "{g1} {g2}");
+        // Doubling the wall's scale opens both gaps by −ln 2.
+        let far = Piece {
+            lambda: wall.lambda * 2.0,
+            ..wall
+        };
+        let [h1, h2] = gaps(&a, &ray_point(&far, &ray).unwrap());
+        assert!(
+            (h1 + 2f64.ln()).abs() < 1e-12 && (h2 + 2f64.ln()).abs() < 1e-12,
+            "{h1} {h2}"
+        );
+    }
 }
