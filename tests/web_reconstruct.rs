@@ -82,7 +82,14 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
     .unwrap();
     assert_eq!(
         *stages.borrow(),
-        ["flow", "superpixels", "motion", "scales", "outputs"]
+        [
+            "flow",
+            "superpixels",
+            "motion",
+            "scales",
+            "refine",
+            "outputs"
+        ]
     );
     // Working size 128 × 55 (downscaled from 192 × 82).
     let (w, h) = (result.width() as usize, result.height() as usize);
@@ -215,7 +222,10 @@ fn exif_intrinsics_and_defaults_as_json() {
         defaults["options"]["params"],
         serde_json::to_value(Params::default()).unwrap()
     );
-    assert_eq!(defaults["stages"].as_array().unwrap().len(), 5);
+    assert_eq!(
+        defaults["stages"].as_array().unwrap().len(),
+        superpixel_soup::Stage::ALL.len()
+    );
     assert_eq!(
         defaults["flowPresets"],
         serde_json::json!(["fast", "medium", "high"])
