@@ -31,15 +31,29 @@ pub enum SceneKind {
     Crowd,
     /// A waving flag (a deforming sheet) in front of a static wall.
     Flag,
+    /// A big creature close to the camera (a tube mesh that bends and swells, its feet on the
+    /// floor) in front of four walkers (boxes on the floor, each shifting and turning its own
+    /// way), while the camera pans (turns, and moves a little sideways).
+    Creature,
+    /// A road seen from a car driving forward along it: cars in both directions at several
+    /// distances and speeds (one pulling away, one we close in on, a truck at our speed, two
+    /// oncoming), buildings, a wall and lamp posts by the road.
+    Road,
+    /// Boxes resting on a table in a room while the camera orbits about the table (turning
+    /// and moving, so there is parallax); one flat box slides across the table top.
+    Table,
 }
 
 impl SceneKind {
     /// Every scene, in a fixed order.
-    pub const ALL: [SceneKind; 4] = [
+    pub const ALL: [SceneKind; 7] = [
         SceneKind::StaticRoom,
         SceneKind::Street,
         SceneKind::Crowd,
         SceneKind::Flag,
+        SceneKind::Creature,
+        SceneKind::Road,
+        SceneKind::Table,
     ];
 
     /// The scene's name as used on the command line and as its case folder.
@@ -49,6 +63,9 @@ impl SceneKind {
             SceneKind::Street => "street",
             SceneKind::Crowd => "crowd",
             SceneKind::Flag => "flag",
+            SceneKind::Creature => "creature",
+            SceneKind::Road => "road",
+            SceneKind::Table => "table",
         }
     }
 

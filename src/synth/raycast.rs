@@ -87,6 +87,32 @@ impl Sheet {
         }
     }
 
+    /// Vertex positions at `time`, row by row.
+    #[cfg(test)]
+    pub fn vertices(&self, time: usize) -> &[Point3<f64>] {
+        &self.positions[time]
+    }
+
+    /// The same sheet with every vertex moved by `g` at both instants (a sheet ignores its
+    /// object's pose, so this is how a sheet built in another frame is placed in the world).
+    pub fn moved(&self, g: &Isometry3<f64>) -> Self {
+        let rows = self.material.len() / self.cols;
+        let positions = self
+            .positions
+            .clone()
+            .map(|p| p.iter().map(|x| g * x).collect::<Vec<_>>());
+        let tiles = [
+            Self::tiles(self.cols, rows, &positions[0]),
+            Self::tiles(self.cols, rows, &positions[1]),
+        ];
+        Sheet {
+            cols: self.cols,
+            material: self.material.clone(),
+            positions,
+            tiles,
+        }
+    }
+
     fn tiles(cols: usize, rows: usize, pos: &[Point3<f64>]) -> Vec<Tile> {
         let mut tiles = Vec::new();
         for j0 in (0..rows - 1).step_by(TILE) {

@@ -16,7 +16,7 @@ use superpixel_soup::synth::{SceneKind, render};
 pub struct Args {
     /// Folder to write into; each scene goes to OUT_DIR/SCENE/ (its name, e.g. OUT_DIR/street/).
     out_dir: PathBuf,
-    /// Scene to render (static-room, street, crowd, flag) or `all`.
+    /// Scene to render (static-room, street, crowd, flag, creature, road, table) or `all`.
     #[arg(long, default_value = "all")]
     scene: String,
     /// Image size as WIDTHxHEIGHT.
