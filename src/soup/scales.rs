@@ -206,7 +206,52 @@ fn truncated(terms: &[(f64, f64)], x: f64, sigma: f64) -> f64 {
 
 /// The exact minimiser of Σ w min(|x + c|, σ) over x in [lo, hi] (the minimum of a sum of
 /// truncated absolute values lies at a kink −c or at a bound), preferring `current` on ties.
+///
+/// One sweep over the sorted breakpoints (−c − σ, −c, −c + σ), between which the sum is linear,
+/// gives its value at every kink in O(n log n) instead of O(n²) (segments of the background
+/// carry thousands of terms); [`minimise_truncated_plain`] is the reference it is tested against.
 fn minimise_truncated(terms: &[(f64, f64)], sigma: f64, current: f64, lo: f64, hi: f64) -> f64 {
+    // (position, slope change, is a kink)
+    let mut events: Vec<(f64, f64, bool)> = Vec::with_capacity(3 * terms.len());
+    for &(w, c) in terms {
+        events.push((-c - sigma, -w, false));
+        events.push((-c, 2.0 * w, true));
+        events.push((-c + sigma, -w, false));
+    }
+    events.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut value: f64 = terms.iter().map(|&(w, _)| w * sigma).sum();
+    let (mut slope, mut at) = (0.0, f64::NEG_INFINITY);
+    let mut best_kink: Option<(f64, f64)> = None;
+    for &(x, change, kink) in &events {
+        if at.is_finite() {
+            value += slope * (x - at);
+        }
+        at = x;
+        if kink && (lo..=hi).contains(&x) && best_kink.is_none_or(|(v, _)| value < v) {
+            best_kink = Some((value, x));
+        }
+        slope += change;
+    }
+    let mut best = (truncated(terms, current, sigma), current);
+    let candidates = best_kink.map(|(_, x)| x).into_iter().chain([lo, hi]);
+    for x in candidates.filter(|x| (lo..=hi).contains(x)) {
+        let e = truncated(terms, x, sigma);
+        if e < best.0 - 1e-12 {
+            best = (e, x);
+        }
+    }
+    best.1
+}
+
+/// [`minimise_truncated`] by evaluating the sum at every kink: the plain reference.
+#[cfg(test)]
+fn minimise_truncated_plain(
+    terms: &[(f64, f64)],
+    sigma: f64,
+    current: f64,
+    lo: f64,
+    hi: f64,
+) -> f64 {
     let mut best = (truncated(terms, current, sigma), current);
     for x in terms
         .iter()
@@ -787,6 +832,11 @@ mod tests {
                 .fold(f64::INFINITY, f64::min);
             assert!(truncated(&terms, x, sigma) <= grid + 1e-12);
             assert!((-2.0..=2.0).contains(&x));
+            let plain = minimise_truncated_plain(&terms, sigma, 0.3, -2.0, 2.0);
+            assert!(
+                (truncated(&terms, x, sigma) - truncated(&terms, plain, sigma)).abs() < 1e-9,
+                "sweep {x} vs plain {plain}"
+            );
         }
     }
 

@@ -168,20 +168,26 @@ fn evaluate(
     Ok((result, rec))
 }
 
+/// The superpixel label of pixel (x, y) of a `width` × `height` image (e.g. the input's): the
+/// label of the nearest working-resolution pixel, as `output::depth_at` picks it.
+fn label_at(labels: &Grid<u32>, width: usize, height: usize, x: usize, y: usize) -> usize {
+    let (lw, lh) = labels.size();
+    let lx = ((x as f64 + 0.5) * lw as f64 / width as f64 - 0.5)
+        .round()
+        .clamp(0.0, (lw - 1) as f64) as usize;
+    let ly = ((y as f64 + 0.5) * lh as f64 / height as f64 - 0.5)
+        .round()
+        .clamp(0.0, (lh - 1) as f64) as usize;
+    *labels.get(lx, ly) as usize
+}
+
 /// The depth at the input resolution (`width` × `height`) where the superpixel's scale is
 /// confident, NaN elsewhere.
 fn confident_depth(rec: &Reconstruction, width: usize, height: usize) -> Grid<f32> {
     let labels = &rec.superpixels.labels;
-    let (lw, lh) = labels.size();
     let min = rec.report.params.scales.min_confidence;
     Grid::from_fn(width, height, |x, y| {
-        let lx = ((x as f64 + 0.5) * lw as f64 / width as f64 - 0.5)
-            .round()
-            .clamp(0.0, (lw - 1) as f64) as usize;
-        let ly = ((y as f64 + 0.5) * lh as f64 / height as f64 - 0.5)
-            .round()
-            .clamp(0.0, (lh - 1) as f64) as usize;
-        if rec.confidence[*labels.get(lx, ly) as usize] >= min {
+        if rec.confidence[label_at(labels, width, height, x, y)] >= min {
             *rec.depth_input.get(x, y)
         } else {
             f32::NAN
@@ -278,16 +284,7 @@ fn oracles(
     let (w, h) = gt.size();
     let unit = depth_at(&rec.unit_soup, &rec.superpixels.labels, w, h, k);
     let labels = &rec.superpixels.labels;
-    let (lw, lh) = labels.size();
-    let label_at = |x: usize, y: usize| {
-        let lx = ((x as f64 + 0.5) * lw as f64 / w as f64 - 0.5)
-            .round()
-            .clamp(0.0, (lw - 1) as f64) as usize;
-        let ly = ((y as f64 + 0.5) * lh as f64 / h as f64 - 0.5)
-            .round()
-            .clamp(0.0, (lh - 1) as f64) as usize;
-        *labels.get(lx, ly) as usize
-    };
+    let label_at = |x: usize, y: usize| label_at(labels, w, h, x, y);
     let scaled_by = |key: &dyn Fn(usize, usize) -> usize, keys: usize| -> f64 {
         let mut ratios = vec![Vec::new(); keys];
         for y in 0..h {
@@ -432,20 +429,13 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
 fn piece_log_ratios(rec: &Reconstruction, gt: &Grid<f32>, k_in: &Intrinsics) -> Vec<Option<f64>> {
     let labels = &rec.superpixels.labels;
     let (w, h) = gt.size();
-    let (lw, lh) = labels.size();
     let unit = depth_at(&rec.unit_soup, labels, w, h, k_in);
     let mut ratios = vec![Vec::new(); rec.unit_soup.pieces.len()];
     for y in 0..h {
         for x in 0..w {
-            let lx = ((x as f64 + 0.5) * lw as f64 / w as f64 - 0.5)
-                .round()
-                .clamp(0.0, (lw - 1) as f64) as usize;
-            let ly = ((y as f64 + 0.5) * lh as f64 / h as f64 - 0.5)
-                .round()
-                .clamp(0.0, (lh - 1) as f64) as usize;
             let (g, z) = (*gt.get(x, y), *unit.get(x, y));
             if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
-                ratios[*labels.get(lx, ly) as usize].push((g as f64 / z as f64).ln());
+                ratios[label_at(labels, w, h, x, y)].push((g as f64 / z as f64).ln());
             }
         }
     }
