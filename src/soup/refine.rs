@@ -10,17 +10,20 @@
 //!   homography K (R + t mᵀ) K⁻¹; scale-free, and 0 for a piece without reliable flow (its state
 //!   then comes from its neighbours).
 //! - E_cont: for the boundary pixel pairs of a and b (subsampled), on the ray r through each
-//!   pair's midpoint, the truncated log-depth gaps min(|ln z_a − ln z_b|, σ) in frame 1 (depths
-//!   of both planes on r) and in frame 2 (camera-2 depths of both pieces' moved points), with
-//!   the same pair weights as the scale solve ([`super::scales`]); a state with a non-positive
-//!   depth in either frame pays the full truncation.
+//!   pair's midpoint, the truncated log-depth gaps of [`scales::gaps`] (frame 1: both planes'
+//!   depths on r; frame 2: how far each moved point lies off the other's moved plane), with the
+//!   same pair weights as the scale solve ([`super::scales`]); a state behind either camera
+//!   pays the full truncation.
 //!
 //! Each iteration draws P particles per piece — its current state (particle 0, so the energy
 //! never rises), the current states of its touching neighbours (the moves that matter most:
-//! a piece adopts a neighbour's plane and motion), and Gaussian perturbations of its scale and
-//! plane that shrink over the iterations — tabulates the unary and the P×P pairwise costs, and
-//! takes the TRW-S labelling when it lowers E. After each iteration the median scale is reset
-//! to 1 (E ignores the global scale).
+//! a piece adopts a neighbour's plane and motion; a piece without flow also gets each
+//! neighbour's motion with a camera-facing plane at their boundary's depth), and Gaussian
+//! perturbations of its scale and plane that shrink over the iterations — tabulates the unary
+//! and the P×P pairwise costs, and takes the TRW-S labelling when it lowers E. After each
+//! iteration the median scale is reset to 1 (E ignores the global scale). At the end, a depth
+//! tail control gives pieces placed more than `max_depth_ratio` from the median depth a
+//! neighbour's motion and a camera-facing plane at their shared boundary's depth.
 
 use nalgebra::Vector3;
 use serde::Serialize;

@@ -1,5 +1,7 @@
-//! Relative scales, one per superpixel: the "3D jigsaw puzzle" of the paper (section 4), with
-//! an energy built so that its minimum sits at the true scales.
+//! Relative scales, one per superpixel: the "3D jigsaw puzzle" of the paper (section 4), from
+//! contacts between touching pieces. (The paper's ARAP energy, eq. 1, scored wrong answers below
+//! the truth on every dynamic case measured, so it is not used; `soup eval --oracle` runs the same
+//! truth test on this energy, which passes it on some cases and not on others.)
 //!
 //! Each piece i of the unit-scale soup is known up to its scale λ_i = e^(s_i): its depths, and
 //! the length of its translation, grow together, so its fit to the flow does not change. What
@@ -13,12 +15,11 @@
 //!
 //!   g₁ = ln z_a − ln z_b = (s_a − s_b) + (ln z̄_a(r) − ln z̄_b(r)) = δ + c₁.
 //!
-//! In frame 2 each plane has moved with its own motion: at unit scale piece a's plane becomes
-//! m'_a = R_a m_a / (1 + m_a · R_aᵀ t̂_a) (from X' = R X + t̂ and mᵀX = 1), and the two pieces'
-//! transfers of r (scale-free: projection ignores λ) give a midpoint ray r' in camera 2, where
-//! the gap is g₂ = δ + c₂ with c₂ = ln z̄'_a(r') − ln z̄'_b(r'). Measuring along one ray makes the
-//! frame-2 term tolerant of sliding contact (a foot on the floor moves along the floor: its point
-//! stays *on the floor's plane* though it left the floor point it touched).
+//! In frame 2 each piece has moved with its own motion, its point to X'_a = R_a X_a + λ_a t̂_a and
+//! its plane to m'_a (see [`RayPoint`]). The frame-2 gap g₂ = ½ (ln m'_bᵀX'_a − ln m'_aᵀX'_b)
+//! measures how far each moved point lies off the other's moved plane (see [`gaps`]); it too is
+//! δ + c₂. Point-to-plane makes the term tolerant of sliding contact (a foot moving along the
+//! floor stays on the floor's plane though it left the floor point it touched).
 //!
 //! Both gaps are scale-free (a global scale cancels in δ), so one truncation σ serves every
 //! scene: ρ(g) = min(|g|, σ), and a real depth edge costs at most σ per pair. A pair's weight
