@@ -119,6 +119,29 @@ pub fn point_clouds(
     (c1, c2)
 }
 
+/// Frame 1 with the superpixels whose scale is unknown (confidence below `min`, see
+/// [`crate::soup::scales::scale_confidence`]) tinted magenta: the parts of the reconstruction
+/// that are guesses. `confidence` has one value per label.
+pub fn confidence_picture(
+    frame: &Frame,
+    labels: &Grid<u32>,
+    confidence: &[f64],
+    min: f64,
+) -> Frame {
+    const TINT: [f32; 3] = [255.0, 0.0, 200.0];
+    Grid::from_fn(labels.width(), labels.height(), |x, y| {
+        let pixel = *frame.get(x, y);
+        let known = confidence
+            .get(*labels.get(x, y) as usize)
+            .is_some_and(|&c| c >= min);
+        if known {
+            pixel
+        } else {
+            [0, 1, 2].map(|c| (0.4 * pixel[c] as f32 + 0.6 * TINT[c]).round() as u8)
+        }
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use nalgebra::Matrix3;
@@ -167,5 +190,22 @@ mod tests {
         assert_eq!(c1.positions[2][2], 4.0);
         assert!((c2.positions[0][0] - c1.positions[0][0] - 1.0).abs() < 1e-6);
         assert_eq!(c2.positions[2], c1.positions[2]);
+    }
+
+    #[test]
+    fn the_confidence_picture_tints_exactly_the_unconfident_superpixels() {
+        let frame = Grid::filled(4, 2, [100u8, 100, 100]);
+        let labels = Grid::from_fn(4, 2, |x, _| (x / 2) as u32);
+        let picture = confidence_picture(&frame, &labels, &[0.5, 0.05], 0.1);
+        for y in 0..2 {
+            for x in 0..4 {
+                let p = *picture.get(x, y);
+                if x < 2 {
+                    assert_eq!(p, [100, 100, 100], "label 0 is confident");
+                } else {
+                    assert_eq!(p, [193, 40, 160], "label 1 is not");
+                }
+            }
+        }
     }
 }

@@ -110,6 +110,9 @@ pub struct Report {
     /// Superpixels whose scale the contacts do not pin (confidence below
     /// `scales.min_confidence`): their depth relative to the rest is a guess.
     pub unconfident: usize,
+    /// Per superpixel (by label), how strongly the contacts pin its scale, in [0, 1]
+    /// ([`crate::soup::scales::scale_confidence`]).
+    pub confidence: Vec<f64>,
     pub notes: Vec<String>,
 }
 
@@ -246,6 +249,7 @@ pub fn reconstruct(
             .iter()
             .filter(|&&c| c < params.scales.min_confidence)
             .count(),
+        confidence: confidence.clone(),
         notes: pair.notes.clone(),
     };
     Ok(Reconstruction {

@@ -94,7 +94,7 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
     // Working size 128 × 55 (downscaled from 192 × 82).
     let (w, h) = (result.width() as usize, result.height() as usize);
     assert_eq!((w, h), (128, 55));
-    for name in ["depth", "unorganised", "superpixels", "flow"] {
+    for name in ["depth", "unorganised", "superpixels", "flow", "confidence"] {
         assert_eq!(result.picture(name).unwrap().len(), 4 * w * h, "{name}");
     }
     assert!(result.picture("albedo").is_err());

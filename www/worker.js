@@ -83,7 +83,7 @@ function run(id, { frames, options }) {
   const collect = performance.now();
   const cloud = takeCloud(current.cloud('organised'));
   const pictures = {};
-  for (const name of ['depth', 'unorganised', 'superpixels', 'flow']) {
+  for (const name of ['depth', 'unorganised', 'superpixels', 'flow', 'confidence']) {
     pictures[name] = current.picture(name);
   }
   const result = {

@@ -38,7 +38,7 @@ use crate::flow::{FlowParams, Preset};
 use crate::formats::ply::Encoding;
 use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
 use crate::input::{DEFAULT_MAX_SIDE, MIN_SIDE, prepare_pair};
-use crate::output::{cloud_labels, dense_depth, depth_at, point_clouds};
+use crate::output::{cloud_labels, confidence_picture, dense_depth, depth_at, point_clouds};
 use crate::pipeline::{FlowInput, Params, Reconstruction, Stage};
 use crate::superpixels::view::boundary_overlay;
 
@@ -376,7 +376,8 @@ impl PageReconstruction {
     /// for `new ImageData(...)`: `"depth"` (frame-1 depth, near warm, far cool, unknown black),
     /// `"unorganised"` (the same for the soup at unit scales, before the scale solve),
     /// `"superpixels"` (frame 1 with superpixel boundaries), `"flow"` (the flow used, Middlebury
-    /// colours, untrusted vectors darker).
+    /// colours, untrusted vectors darker), `"confidence"` (frame 1 with the superpixels whose
+    /// scale no contact pins tinted magenta: their depth is a guess).
     pub fn picture(&self, name: &str) -> Result<Vec<u8>, JsError> {
         let rec = &self.rec;
         let frame = match name {
@@ -384,9 +385,15 @@ impl PageReconstruction {
             "unorganised" => depth_picture(&self.unorganised_depth()),
             "superpixels" => boundary_overlay(&self.frame1, &rec.superpixels, [255, 230, 0]),
             "flow" => flow_picture_with_reliability(&rec.flow, &rec.reliable),
+            "confidence" => confidence_picture(
+                &self.frame1,
+                &rec.superpixels.labels,
+                &rec.confidence,
+                rec.report.params.scales.min_confidence,
+            ),
             other => {
                 return Err(JsError::new(&format!(
-                    "unknown picture {other:?}; choose depth, unorganised, superpixels or flow"
+                    "unknown picture {other:?}; choose depth, unorganised, superpixels, flow or confidence"
                 )));
             }
         };

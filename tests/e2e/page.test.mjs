@@ -73,7 +73,7 @@ test('the sample through the file input, drawn with WebGPU, with every download'
   await page.selectOption('#soup-mode', 'organised');
 
   // Stage pictures at the working size, not blank.
-  for (const id of ['picture-depth', 'picture-superpixels', 'picture-flow', 'picture-unorganised', 'picture-organised']) {
+  for (const id of ['picture-depth', 'picture-superpixels', 'picture-flow', 'picture-confidence', 'picture-unorganised', 'picture-organised']) {
     const { width, height, colours } = await page.$eval(`#${id}`, (canvas) => {
       const { data } = canvas.getContext('2d').getImageData(0, 0, canvas.width, canvas.height);
       const seen = new Set();

@@ -32,6 +32,7 @@ export function showPictures(result) {
   draw('picture-unorganised', result.pictures.unorganised);
   draw('picture-superpixels', result.pictures.superpixels);
   draw('picture-flow', result.pictures.flow);
+  draw('picture-confidence', result.pictures.confidence);
   drawLegend(result.legend);
   $('superpixel-count').textContent = result.report.superpixels.toLocaleString('en');
   fillSummary(result.report);
