@@ -460,3 +460,50 @@ fn a_params_file_sets_parameters_and_rejects_unknown_ones() {
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("unknown parameter refine.iteratons"), "{err}");
 }
+
+#[test]
+fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
+    // `soup eval --oracle`: the scale energy at the scale solve's answer and at the ground truth
+    // (each superpixel at its oracle scale) polished by the per-piece descent. An energy that
+    // prefers wrong answers would rank the polished truth above the solution. Exact flow, a
+    // static and a dynamic scene (the street's cars move on their own).
+    let dir = temp_dir("truth-test");
+    for scene in ["static-room", "street"] {
+        let out = soup(&[
+            "synth",
+            dir.to_str().unwrap(),
+            "--scene",
+            scene,
+            "--size",
+            "512x218",
+        ]);
+        assert!(out.status.success());
+        let case = dir.join(scene);
+        let out = soup(&[
+            "eval",
+            case.to_str().unwrap(),
+            "--gt-flow",
+            "--superpixels",
+            "600",
+            "--oracle",
+        ]);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let text = String::from_utf8_lossy(&out.stdout);
+        let energy = |state: &str| -> f64 {
+            let row = text
+                .lines()
+                .find(|l| l.starts_with(&format!("| scales | {state} |")))
+                .unwrap_or_else(|| panic!("no {state} row in:\n{text}"));
+            row.split('|').nth(3).unwrap().trim().parse().unwrap()
+        };
+        let (solution, truth) = (energy("scale solve"), energy("truth polished"));
+        assert!(
+            truth < solution,
+            "{scene}: polished truth {truth} not below the solution {solution}"
+        );
+    }
+}
