@@ -371,7 +371,7 @@ fn is_planar(points: &[Correspondence], focal: f64) -> bool {
 }
 
 /// Up to `per` correspondences spread over each superpixel's pixels with reliable, known flow.
-fn sample_correspondences(
+pub(super) fn sample_correspondences(
     sp: &Superpixels,
     flow: &FlowField,
     reliable: &Grid<bool>,

@@ -57,11 +57,26 @@ pub fn planar_cost(points: &[Correspondence], motion: &Motion, focal: f64, cap_p
     let Some(inverse) = (ata + Matrix3::identity() * ridge).try_inverse() else {
         return cap_px;
     };
-    let m = inverse * atb;
+    mean_transfer_px(points, motion, &(inverse * atb), focal, cap_px)
+}
+
+/// The mean transfer error in pixels (`focal` converts) of `points` under `motion` and the
+/// plane `m` (at the motion's translation), each point's error capped at `cap_px`; a point the
+/// plane puts behind either camera costs `cap_px`. `cap_px` for no points.
+pub fn mean_transfer_px(
+    points: &[Correspondence],
+    motion: &Motion,
+    m: &Vector3<f64>,
+    focal: f64,
+    cap_px: f64,
+) -> f64 {
+    if points.is_empty() {
+        return cap_px;
+    }
     points
         .iter()
         .map(|c| {
-            let e = transfer_error(c, motion, &m) * focal;
+            let e = transfer_error(c, motion, m) * focal;
             if e.is_finite() && m.dot(&c.x1) > 0.0 {
                 e.min(cap_px)
             } else {

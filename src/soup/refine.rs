@@ -28,8 +28,11 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
-use super::scales::{self, RayPoint, ScaleInputs, ScaleParams, midpoint_ray, pair_weight};
+use super::init::sample_correspondences;
+use super::plane::mean_transfer_px;
+use super::scales::{self, RayPoint, ScaleInputs, ScaleParams, pair_weight, sampled_pairs};
 use super::{Piece, Soup};
+use crate::geometry::essential::Motion;
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
 use crate::rng::Rng;
 
@@ -140,28 +143,7 @@ impl Problem {
     ) -> Self {
         let sp = inputs.superpixels;
         let k = inputs.intrinsics;
-        let width = sp.labels.width();
-        let samples = sp
-            .segments
-            .iter()
-            .map(|seg| {
-                let reliable: Vec<u32> = seg
-                    .pixels
-                    .iter()
-                    .copied()
-                    .filter(|&p| inputs.reliable.data()[p as usize])
-                    .collect();
-                let step = reliable.len().div_ceil(params.samples.max(1)).max(1);
-                reliable
-                    .iter()
-                    .step_by(step)
-                    .map(|&p| {
-                        let p = p as usize;
-                        super::init::correspondence(p % width, p / width, inputs.flow.data()[p], k)
-                    })
-                    .collect()
-            })
-            .collect();
+        let samples = sample_correspondences(sp, inputs.flow, inputs.reliable, k, params.samples);
         let mut contacts = Vec::new();
         let mut neighbours = vec![Vec::new(); soup.pieces.len()];
         for edge in inputs
@@ -171,14 +153,10 @@ impl Problem {
             .filter(|e| !e.pairs.is_empty())
         {
             let (a, b) = (edge.a as usize, edge.b as usize);
-            let step = edge
-                .pairs
-                .len()
-                .div_ceil(scale_params.pairs_per_boundary.max(1));
             let mut rays = Vec::new();
             let mut weights = Vec::new();
-            for (j, &(p, q)) in edge.pairs.iter().enumerate().step_by(step) {
-                rays.push(midpoint_ray(p, q, width, k));
+            for (j, ray) in sampled_pairs(edge, inputs, scale_params) {
+                rays.push(ray);
                 weights.push(pair_weight(soup, inputs, scale_params, edge, j));
             }
             let total = weights.len() as f64;
@@ -235,21 +213,13 @@ impl Problem {
         if samples.is_empty() {
             return 0.0;
         }
-        let cap = self.params.cap_px;
-        let m = piece.m / piece.lambda;
-        let t = piece.t_hat * piece.lambda;
-        let sum: f64 = samples
-            .iter()
-            .map(|c| {
-                let p = piece.r * c.x1 + t * m.dot(&c.x1);
-                if p.z <= 1e-12 || m.dot(&c.x1) <= 0.0 {
-                    return cap;
-                }
-                let e = (p.x / p.z - c.x2.x).hypot(p.y / p.z - c.x2.y) * self.focal;
-                e.min(cap)
-            })
-            .sum();
-        self.params.proj_weight * sum / samples.len() as f64
+        // The homography R + t mᵀ does not depend on λ: unit translation and unit-scale plane.
+        let motion = Motion {
+            r: piece.r,
+            t: piece.t_hat,
+        };
+        let cost = mean_transfer_px(samples, &motion, &piece.m, self.focal, self.params.cap_px);
+        self.params.proj_weight * cost
     }
 
     /// E_cont between two states given where they meet the contact's rays.
@@ -342,7 +312,9 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
         for (piece, (ps, &l)) in soup.pieces.iter_mut().zip(particles.iter().zip(&labels)) {
             *piece = ps[l];
         }
-        normalise_median_scale(soup);
+        // E does not see a global scale: the median λ goes back to 1.
+        let log_scales: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
+        scales::set_scales(soup, &log_scales);
         energies.push(problem.energy(soup));
     }
     let tail_pieces = depth_tail_control(soup, problem);
@@ -474,14 +446,4 @@ fn flattened(state: &Piece, z: f64) -> Piece {
 
 fn same_state(a: &Piece, b: &Piece) -> bool {
     a.lambda == b.lambda && a.m == b.m && a.r == b.r && a.t_hat == b.t_hat
-}
-
-/// Divides every λ by the median λ (the energy does not see a global scale).
-fn normalise_median_scale(soup: &mut Soup) {
-    let mut l: Vec<f64> = soup.pieces.iter().map(|p| p.lambda).collect();
-    l.sort_by(f64::total_cmp);
-    let median = l.get(l.len() / 2).copied().unwrap_or(1.0);
-    if median > 0.0 && median.is_finite() {
-        soup.pieces.iter_mut().for_each(|p| p.lambda /= median);
-    }
 }

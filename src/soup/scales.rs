@@ -155,10 +155,20 @@ pub struct Link {
 impl Link {
     /// φ(δ).
     pub fn value(&self, delta: f64, sigma: f64) -> f64 {
-        self.terms
-            .iter()
-            .map(|&(w, c)| w * (delta + c).abs().min(sigma))
-            .sum()
+        truncated(&self.terms, delta, sigma)
+    }
+
+    /// φ with every gap truncated: the most the link can cost.
+    fn full(&self, sigma: f64) -> f64 {
+        self.terms.iter().map(|&(w, _)| w * sigma).sum()
+    }
+
+    /// The link's terms as functions of x, the log-scale of its piece a (`from_a`) or b, with
+    /// the other piece's log-scale at `other`: (w, c') with gap = x + c'.
+    fn seen_from(&self, from_a: bool, other: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
+        // δ = s_a − s_b: from a, gap = x − other + c; from b, |other − x + c| = |x − other − c|.
+        let sign = if from_a { 1.0 } else { -1.0 };
+        self.terms.iter().map(move |&(w, c)| (w, sign * c - other))
     }
 }
 
@@ -186,12 +196,8 @@ impl Problem {
         let mut out = Vec::new();
         for &e in &self.touching[i] {
             let l = &self.links[e];
-            // δ = s_a − s_b; as a function of s_i: gap = ±(s_i − s_other) + c.
-            if l.a == i {
-                out.extend(l.terms.iter().map(|&(w, c)| (w, c - s[l.b])));
-            } else {
-                out.extend(l.terms.iter().map(|&(w, c)| (w, -c - s[l.a])));
-            }
+            let other = if l.a == i { s[l.b] } else { s[l.a] };
+            out.extend(l.seen_from(l.a == i, other));
         }
         out
     }
@@ -271,29 +277,21 @@ fn minimise_truncated_plain(
 /// Builds the contact problem of `soup` (its pieces' planes and motions; scales are ignored).
 pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Problem {
     let ScaleInputs {
-        superpixels: sp,
-        boundaries,
-        flow,
-        intrinsics: k,
-        ..
+        boundaries, flow, ..
     } = *inputs;
     let unit = |p: &Piece| Piece { lambda: 1.0, ..*p };
-    let width = sp.labels.width();
     let mut links = Vec::new();
     for edge in boundaries.edges.iter().filter(|e| !e.pairs.is_empty()) {
         let (a, b) = (edge.a as usize, edge.b as usize);
         let (pa, pb) = (&soup.pieces[a], &soup.pieces[b]);
-        let step = edge.pairs.len().div_ceil(params.pairs_per_boundary.max(1));
+        let mut jumps: Vec<f64> = edge
+            .pairs
+            .iter()
+            .map(|&(p, q)| flow_jump(flow.data()[p as usize], flow.data()[q as usize]))
+            .collect();
         let mut terms = Vec::new();
         let mut c1s = Vec::new();
-        let mut jumps = Vec::new();
-        for (j, &(p, q)) in edge.pairs.iter().enumerate() {
-            let (fp, fq) = (flow.data()[p as usize], flow.data()[q as usize]);
-            jumps.push(((fp[0] - fq[0]) as f64).hypot((fp[1] - fq[1]) as f64));
-            if j % step != 0 {
-                continue;
-            }
-            let r = midpoint_ray(p, q, width, k);
+        for (j, r) in sampled_pairs(edge, inputs, params) {
             let (Some(ra), Some(rb)) = (ray_point(&unit(pa), &r), ray_point(&unit(pb), &r)) else {
                 continue;
             };
@@ -479,15 +477,13 @@ fn solve_segments(
         let mut out = Vec::new();
         for &e in &between[g] {
             let l = &problem.links[e];
-            let (ga, gb) = (segment[l.a], segment[l.b]);
-            // δ = s_a − s_b with s = centre + u.
-            if ga == g {
-                let other = u[gb] + centre[gb] - centre[g];
-                out.extend(l.terms.iter().map(|&(w, c)| (w, c - other)));
+            // s = centre + u: the other segment's log-scale, relative to this one's centre.
+            let h = if segment[l.a] == g {
+                segment[l.b]
             } else {
-                let other = u[ga] + centre[ga] - centre[g];
-                out.extend(l.terms.iter().map(|&(w, c)| (w, -c - other)));
-            }
+                segment[l.a]
+            };
+            out.extend(l.seen_from(segment[l.a] == g, u[h] + centre[h] - centre[g]));
         }
         out
     };
@@ -548,17 +544,13 @@ fn spanning_tree_start(
         if ga == gb {
             continue;
         }
+        // As functions of d = u_g − u_h (g < h), seen from g with h's offset at 0:
         // δ = (centre_a + u_a) − (centre_b + u_b).
-        let off = centre[ga] - centre[gb];
-        let (key, sign) = if ga < gb {
-            ((ga, gb), 1.0)
-        } else {
-            ((gb, ga), -1.0)
-        };
+        let (g, h) = (ga.min(gb), ga.max(gb));
         pairs
-            .entry(key)
+            .entry((g, h))
             .or_default()
-            .extend(l.terms.iter().map(|&(w, c)| (w, sign * (c + off))));
+            .extend(l.seen_from(ga == g, centre[h] - centre[g]));
     }
     let mut edges: Vec<((usize, usize), f64, f64)> = pairs
         .into_iter()
@@ -598,8 +590,7 @@ fn tail_control(problem: &Problem, s: &mut [f64], params: &ScaleParams) -> usize
         }
         let disagrees = links.iter().all(|&e| {
             let l = &problem.links[e];
-            let full: f64 = l.terms.iter().map(|t| t.0 * sigma).sum();
-            l.value(s[l.a] - s[l.b], sigma) >= 0.9 * full
+            l.value(s[l.a] - s[l.b], sigma) >= 0.9 * l.full(sigma)
         });
         let continuous = links
             .iter()
@@ -661,8 +652,7 @@ fn contact_evidence(
     params: &ScaleParams,
 ) -> f64 {
     let sin = m_a.normalize().cross(&m_b.normalize()).norm();
-    let jump = ((f_p[0] - f_q[0]) as f64).hypot((f_p[1] - f_q[1]) as f64);
-    let continuity = (-jump / params.flow_scale_px).exp();
+    let continuity = (-flow_jump(f_p, f_q) / params.flow_scale_px).exp();
     let e = sin.max(continuity);
     if e.is_finite() {
         e.max(params.evidence_floor)
@@ -671,15 +661,34 @@ fn contact_evidence(
     }
 }
 
-/// The ray (normalised, z = 1) through the midpoint of boundary pixels `p` and `q`
-/// (indices y · width + x).
-pub fn midpoint_ray(p: u32, q: u32, width: usize, k: &Intrinsics) -> Vector3<f64> {
-    let (p, q) = (p as usize, q as usize);
-    let mid = [
-        (p % width + q % width) as f64 * 0.5,
-        (p / width + q / width) as f64 * 0.5,
-    ];
-    Vector3::from(k.ray(mid[0], mid[1]))
+/// The boundary pairs of `edge` that the contact terms use (at most `pairs_per_boundary`,
+/// evenly spaced): each pair's index in the edge and the ray (normalised, z = 1) through the
+/// midpoint of its two pixels.
+pub fn sampled_pairs<'e>(
+    edge: &'e crate::superpixels::graph::BoundaryEdge,
+    inputs: &ScaleInputs<'e>,
+    params: &ScaleParams,
+) -> impl Iterator<Item = (usize, Vector3<f64>)> + 'e {
+    let width = inputs.superpixels.labels.width();
+    let k = *inputs.intrinsics;
+    let step = edge.pairs.len().div_ceil(params.pairs_per_boundary.max(1));
+    edge.pairs
+        .iter()
+        .enumerate()
+        .step_by(step.max(1))
+        .map(move |(j, &(p, q))| {
+            let (p, q) = (p as usize, q as usize);
+            let mid = [
+                (p % width + q % width) as f64 * 0.5,
+                (p / width + q / width) as f64 * 0.5,
+            ];
+            (j, Vector3::from(k.ray(mid[0], mid[1])))
+        })
+}
+
+/// ‖f(p) − f(q)‖ in pixels: how much the flow jumps between two pixels.
+fn flow_jump(f_p: [f32; 2], f_q: [f32; 2]) -> f64 {
+    ((f_p[0] - f_q[0]) as f64).hypot((f_p[1] - f_q[1]) as f64)
 }
 
 /// A piece's surface where a boundary ray meets it, in both frames (camera-1 and camera-2
@@ -789,7 +798,7 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
             continue;
         }
         let delta = s[l.a] - s[l.b];
-        let weight: f64 = l.terms.iter().map(|t| t.0 * problem.sigma).sum();
+        let weight = l.full(problem.sigma);
         for (j, d) in [-step, 0.0, step].into_iter().enumerate() {
             rise[ga][j] += l.value(delta + d, problem.sigma);
             rise[gb][j] += l.value(delta - d, problem.sigma);
