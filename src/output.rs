@@ -28,6 +28,16 @@ pub fn dense_depth(soup: &Soup, labels: &Grid<u32>, k: &Intrinsics) -> Grid<f32>
     })
 }
 
+/// The superpixel label of pixel (x, y) of a `width` × `height` image (e.g. the input's): the
+/// label of the nearest working-resolution pixel (pixel centres at integers on both grids).
+pub fn nearest_label(labels: &Grid<u32>, width: usize, height: usize, x: usize, y: usize) -> usize {
+    let sx = labels.width() as f64 / width as f64;
+    let sy = labels.height() as f64 / height as f64;
+    let lx = (((x as f64 + 0.5) * sx - 0.5).round().max(0.0) as usize).min(labels.width() - 1);
+    let ly = (((y as f64 + 0.5) * sy - 0.5).round().max(0.0) as usize).min(labels.height() - 1);
+    *labels.get(lx, ly) as usize
+}
+
 /// Frame-1 z-depth at another resolution (e.g. the input's, `k_out` its intrinsics): each pixel
 /// takes the label of the nearest working-resolution pixel and is evaluated on that plane at its
 /// own ray, so planes stay exact instead of being upsampled.
@@ -38,12 +48,8 @@ pub fn depth_at(
     height: usize,
     k_out: &Intrinsics,
 ) -> Grid<f32> {
-    let sx = labels.width() as f64 / width as f64;
-    let sy = labels.height() as f64 / height as f64;
     Grid::from_fn(width, height, |x, y| {
-        let lx = (((x as f64 + 0.5) * sx - 0.5).round().max(0.0) as usize).min(labels.width() - 1);
-        let ly = (((y as f64 + 0.5) * sy - 0.5).round().max(0.0) as usize).min(labels.height() - 1);
-        let piece = &soup.pieces[*labels.get(lx, ly) as usize];
+        let piece = &soup.pieces[nearest_label(labels, width, height, x, y)];
         piece.depth(&Vector3::from(k_out.ray(x as f64, y as f64))) as f32
     })
 }

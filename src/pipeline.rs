@@ -132,9 +132,6 @@ pub struct Reconstruction {
     pub unit_soup: Soup,
     /// The soup with relative scales, refined (median λ = 1: the "organised" soup).
     pub soup: Soup,
-    /// Per superpixel, how strongly the contacts pin its scale, in [0, 1]
-    /// ([`crate::soup::scales::scale_confidence`]).
-    pub confidence: Vec<f64>,
     /// Frame-1 depth at the working resolution (NaN = unknown).
     pub depth: Grid<f32>,
     /// Frame-1 depth at the input resolution (NaN = unknown).
@@ -213,10 +210,10 @@ pub fn reconstruct(
         let problem = refine::Problem::new(&soup, &inputs, &params.scales, &params.refine);
         refine::refine(&mut soup, &problem)
     });
-    let confidence = scale_confidence(&soup, &inputs, &params.scales);
     timings.push((Stage::Refine, clock.lap()));
 
     progress(Stage::Outputs, 0.0);
+    let confidence = scale_confidence(&soup, &inputs, &params.scales);
     let depth = dense_depth(&soup, &sp.labels, &k);
     let (iw, ih) = pair.input_size;
     let (sx, sy) = pair.scale();
@@ -249,7 +246,7 @@ pub fn reconstruct(
             .iter()
             .filter(|&&c| c < params.scales.min_confidence)
             .count(),
-        confidence: confidence.clone(),
+        confidence,
         notes: pair.notes.clone(),
     };
     Ok(Reconstruction {
@@ -260,7 +257,6 @@ pub fn reconstruct(
         knn,
         unit_soup,
         soup,
-        confidence,
         depth,
         depth_input,
         cloud1,

@@ -388,7 +388,7 @@ impl PageReconstruction {
             "confidence" => confidence_picture(
                 &self.frame1,
                 &rec.superpixels.labels,
-                &rec.confidence,
+                &rec.report.confidence,
                 rec.report.params.scales.min_confidence,
             ),
             other => {

@@ -13,7 +13,7 @@ use superpixel_soup::formats::write_file;
 use superpixel_soup::grid::Grid;
 use superpixel_soup::image::{ExifInfo, LoadedImage};
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
-use superpixel_soup::output::depth_at;
+use superpixel_soup::output::{depth_at, nearest_label};
 use superpixel_soup::soup::scales::{self, ScaleInputs};
 use superpixel_soup::soup::{Soup, refine};
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
@@ -168,26 +168,13 @@ fn evaluate(
     Ok((result, rec))
 }
 
-/// The superpixel label of pixel (x, y) of a `width` × `height` image (e.g. the input's): the
-/// label of the nearest working-resolution pixel, as `output::depth_at` picks it.
-fn label_at(labels: &Grid<u32>, width: usize, height: usize, x: usize, y: usize) -> usize {
-    let (lw, lh) = labels.size();
-    let lx = ((x as f64 + 0.5) * lw as f64 / width as f64 - 0.5)
-        .round()
-        .clamp(0.0, (lw - 1) as f64) as usize;
-    let ly = ((y as f64 + 0.5) * lh as f64 / height as f64 - 0.5)
-        .round()
-        .clamp(0.0, (lh - 1) as f64) as usize;
-    *labels.get(lx, ly) as usize
-}
-
 /// The depth at the input resolution (`width` × `height`) where the superpixel's scale is
 /// confident, NaN elsewhere.
 fn confident_depth(rec: &Reconstruction, width: usize, height: usize) -> Grid<f32> {
     let labels = &rec.superpixels.labels;
     let min = rec.report.params.scales.min_confidence;
     Grid::from_fn(width, height, |x, y| {
-        if rec.confidence[label_at(labels, width, height, x, y)] >= min {
+        if rec.report.confidence[nearest_label(labels, width, height, x, y)] >= min {
             *rec.depth_input.get(x, y)
         } else {
             f32::NAN
@@ -284,23 +271,11 @@ fn oracles(
     let (w, h) = gt.size();
     let unit = depth_at(&rec.unit_soup, &rec.superpixels.labels, w, h, k);
     let labels = &rec.superpixels.labels;
-    let label_at = |x: usize, y: usize| label_at(labels, w, h, x, y);
+    let label_at = |x: usize, y: usize| nearest_label(labels, w, h, x, y);
     let scaled_by = |key: &dyn Fn(usize, usize) -> usize, keys: usize| -> f64 {
-        let mut ratios = vec![Vec::new(); keys];
-        for y in 0..h {
-            for x in 0..w {
-                let (g, z) = (*gt.get(x, y), *unit.get(x, y));
-                if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
-                    ratios[key(x, y)].push(g as f64 / z as f64);
-                }
-            }
-        }
-        let scales: Vec<f64> = ratios
-            .into_iter()
-            .map(|r| if r.is_empty() { f64::NAN } else { median(r) })
-            .collect();
+        let scales = oracle_ratios(&unit, gt, key, keys);
         let est = Grid::from_fn(w, h, |x, y| {
-            (*unit.get(x, y) as f64 * scales[key(x, y)]) as f32
+            (*unit.get(x, y) as f64 * scales[key(x, y)].unwrap_or(f64::NAN)) as f32
         });
         depth_metrics(gt, &est).map_or(f64::NAN, |m| m.mre)
     };
@@ -430,12 +405,27 @@ fn piece_log_ratios(rec: &Reconstruction, gt: &Grid<f32>, k_in: &Intrinsics) -> 
     let labels = &rec.superpixels.labels;
     let (w, h) = gt.size();
     let unit = depth_at(&rec.unit_soup, labels, w, h, k_in);
-    let mut ratios = vec![Vec::new(); rec.unit_soup.pieces.len()];
-    for y in 0..h {
-        for x in 0..w {
+    let key = |x: usize, y: usize| nearest_label(labels, w, h, x, y);
+    oracle_ratios(&unit, gt, &key, rec.unit_soup.pieces.len())
+        .into_iter()
+        .map(|r| r.map(f64::ln))
+        .collect()
+}
+
+/// Per key (`key(x, y)` < `keys`: a superpixel, a ground-truth motion group), the oracle scale
+/// median(z_gt / z) over its pixels with valid depths in both; `None` for a key without any.
+fn oracle_ratios(
+    unit: &Grid<f32>,
+    gt: &Grid<f32>,
+    key: &dyn Fn(usize, usize) -> usize,
+    keys: usize,
+) -> Vec<Option<f64>> {
+    let mut ratios = vec![Vec::new(); keys];
+    for y in 0..gt.height() {
+        for x in 0..gt.width() {
             let (g, z) = (*gt.get(x, y), *unit.get(x, y));
             if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
-                ratios[label_at(labels, w, h, x, y)].push((g as f64 / z as f64).ln());
+                ratios[key(x, y)].push(g as f64 / z as f64);
             }
         }
     }
