@@ -20,6 +20,24 @@ fn temp_dir(name: &str) -> PathBuf {
     dir
 }
 
+/// Renders `scene` at `size` ("WxH") with `soup synth` into `dir`; returns the case folder.
+fn synth_scene(dir: &std::path::Path, scene: &str, size: &str) -> PathBuf {
+    let out = soup(&[
+        "synth",
+        dir.to_str().unwrap(),
+        "--scene",
+        scene,
+        "--size",
+        size,
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    dir.join(scene)
+}
+
 #[test]
 fn synth_writes_every_scene_in_the_case_layout() {
     let dir = temp_dir("synth");
@@ -82,16 +100,7 @@ fn errors_are_one_line_and_exit_non_zero() {
 #[test]
 fn reconstruct_writes_the_documented_files() {
     let dir = temp_dir("reconstruct");
-    let out = soup(&[
-        "synth",
-        dir.to_str().unwrap(),
-        "--scene",
-        "static-room",
-        "--size",
-        "256x110",
-    ]);
-    assert!(out.status.success());
-    let case = dir.join("static-room");
+    let case = synth_scene(&dir, "static-room", "256x110");
     let intrinsics = std::fs::read_to_string(case.join("intrinsics.txt")).unwrap();
     let result = dir.join("result");
     let path = |name: &str| case.join(name).to_str().unwrap().to_string();
@@ -177,16 +186,7 @@ fn reconstruct_writes_the_documented_files() {
 #[test]
 fn flow_writes_both_fields_and_a_picture_and_scores_cases() {
     let dir = temp_dir("flow");
-    let out = soup(&[
-        "synth",
-        dir.to_str().unwrap(),
-        "--scene",
-        "street",
-        "--size",
-        "192x96",
-    ]);
-    assert!(out.status.success());
-    let case = dir.join("street");
+    let case = synth_scene(&dir, "street", "192x96");
     let path = |name: &str| case.join(name).to_str().unwrap().to_string();
     let (forward, backward, viz) = (dir.join("f.flo"), dir.join("b.flo"), dir.join("f.png"));
     let out = soup(&[
@@ -249,16 +249,7 @@ fn flow_writes_both_fields_and_a_picture_and_scores_cases() {
 #[test]
 fn superpixels_writes_labels_and_pictures() {
     let dir = temp_dir("superpixels");
-    let synth = soup(&[
-        "synth",
-        dir.to_str().unwrap(),
-        "--scene",
-        "street",
-        "--size",
-        "128x64",
-    ]);
-    assert!(synth.status.success());
-    let frame = dir.join("street").join("frame1.png");
+    let frame = synth_scene(&dir, "street", "128x64").join("frame1.png");
     let file = |name: &str| dir.join(name).to_str().unwrap().to_string();
     let out = soup(&[
         "superpixels",
@@ -315,16 +306,7 @@ fn a_fresh_process_writes_the_same_files() {
     // The flag, because its many motion hypotheses make the result depend on the RANSAC
     // samples: with the seed changed per process its outputs differ (the street's happen not to).
     let dir = temp_dir("fresh-process");
-    let out = soup(&[
-        "synth",
-        dir.to_str().unwrap(),
-        "--scene",
-        "flag",
-        "--size",
-        "256x110",
-    ]);
-    assert!(out.status.success());
-    let case = dir.join("flag");
+    let case = synth_scene(&dir, "flag", "256x110");
     let path = |name: &str| case.join(name).to_str().unwrap().to_string();
     let run = |name: &str| {
         let result = dir.join(name);
@@ -404,16 +386,7 @@ fn help_shows_the_library_defaults() {
 #[test]
 fn a_params_file_sets_parameters_and_rejects_unknown_ones() {
     let dir = temp_dir("params");
-    let out = soup(&[
-        "synth",
-        dir.to_str().unwrap(),
-        "--scene",
-        "static-room",
-        "--size",
-        "256x110",
-    ]);
-    assert!(out.status.success());
-    let case = dir.join("static-room");
+    let case = synth_scene(&dir, "static-room", "256x110");
     let intrinsics = std::fs::read_to_string(case.join("intrinsics.txt")).unwrap();
     let path = |name: &str| case.join(name).to_str().unwrap().to_string();
     let run = |params: &str| {
@@ -469,16 +442,7 @@ fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
     // static and a dynamic scene (the street's cars move on their own).
     let dir = temp_dir("truth-test");
     for scene in ["static-room", "street"] {
-        let out = soup(&[
-            "synth",
-            dir.to_str().unwrap(),
-            "--scene",
-            scene,
-            "--size",
-            "512x218",
-        ]);
-        assert!(out.status.success());
-        let case = dir.join(scene);
+        let case = synth_scene(&dir, scene, "512x218");
         let out = soup(&[
             "eval",
             case.to_str().unwrap(),
