@@ -1,20 +1,15 @@
 //! MPI Sintel depth (`.dpt`): the tag float 202021.25 (the bytes `PIEH`, as in `.flo`), width and
 //! height as little-endian i32, then width × height float32 depths, row by row from the top.
 
-use super::f32_le;
+use super::{f32_le, pieh_header, read_pieh_header};
 use crate::error::{Error, Result};
 use crate::grid::Grid;
-
-/// The tag float at the start of a `.dpt` file (its bytes spell `PIEH`).
-pub const TAG: f32 = 202021.25;
 
 /// Encodes a depth map as `.dpt` (values written as they are, NaN included).
 pub fn encode(depth: &Grid<f32>) -> Vec<u8> {
     let (w, h) = depth.size();
-    let mut out = Vec::with_capacity(12 + w * h * 4);
-    out.extend_from_slice(&TAG.to_le_bytes());
-    out.extend_from_slice(&(w as i32).to_le_bytes());
-    out.extend_from_slice(&(h as i32).to_le_bytes());
+    let mut out = pieh_header(w, h);
+    out.reserve(w * h * 4);
     for z in depth.data() {
         out.extend_from_slice(&z.to_le_bytes());
     }
@@ -26,17 +21,11 @@ pub fn encode(depth: &Grid<f32>) -> Vec<u8> {
 /// such).
 pub fn decode(bytes: &[u8]) -> Result<Grid<f32>> {
     let bad = |reason: String| Error::format(".dpt", reason);
-    if bytes.len() < 12 || f32_le(bytes, 0) != TAG {
-        return Err(bad(
-            "missing the PIEH tag (202021.25) of a Sintel depth file".into(),
-        ));
-    }
-    let w = i32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]);
-    let h = i32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-    if !(1..=1 << 16).contains(&w) || !(1..=1 << 16).contains(&h) {
-        return Err(bad(format!("invalid size {w}×{h}")));
-    }
-    let (w, h) = (w as usize, h as usize);
+    let (w, h) = read_pieh_header(
+        bytes,
+        ".dpt",
+        "missing the PIEH tag (202021.25) of a Sintel depth file",
+    )?;
     let data = &bytes[12..];
     if data.len() == w * h * 8 {
         return Err(bad(format!(

@@ -2,7 +2,7 @@
 //! little-endian i32, then (u, v) float32 pairs row by row. Vectors with |u| or |v| > 1e9 are
 //! unknown; in memory they are NaN ([`crate::flow::FlowField`]) and we write them as 1e10.
 
-use super::f32_le;
+use super::{f32_le, pieh_header, read_pieh_header};
 use crate::error::{Error, Result};
 use crate::flow::FlowField;
 use crate::grid::Grid;
@@ -15,10 +15,8 @@ pub const UNKNOWN_THRESHOLD: f32 = 1e9;
 /// Encodes a flow field; NaN vectors become [`UNKNOWN`].
 pub fn encode(flow: &FlowField) -> Vec<u8> {
     let (w, h) = flow.size();
-    let mut out = Vec::with_capacity(12 + w * h * 8);
-    out.extend_from_slice(b"PIEH");
-    out.extend_from_slice(&(w as i32).to_le_bytes());
-    out.extend_from_slice(&(h as i32).to_le_bytes());
+    let mut out = pieh_header(w, h);
+    out.reserve(w * h * 8);
     for &[u, v] in flow.data() {
         let known = crate::flow::is_known([u, v]);
         let (u, v) = if known { (u, v) } else { (UNKNOWN, UNKNOWN) };
@@ -31,15 +29,7 @@ pub fn encode(flow: &FlowField) -> Vec<u8> {
 /// Decodes a `.flo` file; unknown vectors come back as NaN.
 pub fn decode(bytes: &[u8]) -> Result<FlowField> {
     let bad = |reason: String| Error::format(".flo", reason);
-    if bytes.len() < 12 || &bytes[..4] != b"PIEH" {
-        return Err(bad("missing PIEH magic".into()));
-    }
-    let w = i32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]);
-    let h = i32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
-    if !(1..=1 << 16).contains(&w) || !(1..=1 << 16).contains(&h) {
-        return Err(bad(format!("invalid size {w}×{h}")));
-    }
-    let (w, h) = (w as usize, h as usize);
+    let (w, h) = read_pieh_header(bytes, ".flo", "missing PIEH magic")?;
     let need = 12 + w * h * 8;
     if bytes.len() < need {
         return Err(bad(format!(

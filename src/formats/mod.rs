@@ -64,6 +64,29 @@ pub fn decode_depth(bytes: &[u8], png_scale: Option<f64>) -> Result<crate::Grid<
     }
 }
 
+/// The 12-byte header that `.flo` and Sintel's `.dpt` share: the bytes `PIEH` (the float
+/// 202021.25), then width and height as little-endian i32.
+fn pieh_header(width: usize, height: usize) -> Vec<u8> {
+    let mut out = b"PIEH".to_vec();
+    out.extend_from_slice(&(width as i32).to_le_bytes());
+    out.extend_from_slice(&(height as i32).to_le_bytes());
+    out
+}
+
+/// Width and height from a [`pieh_header`]. Errors name `format`: `missing` when the tag is
+/// not there, or the size when it is not in 1..=65536.
+fn read_pieh_header(bytes: &[u8], format: &'static str, missing: &str) -> Result<(usize, usize)> {
+    if bytes.len() < 12 || &bytes[..4] != b"PIEH" {
+        return Err(Error::format(format, missing));
+    }
+    let w = i32::from_le_bytes([bytes[4], bytes[5], bytes[6], bytes[7]]);
+    let h = i32::from_le_bytes([bytes[8], bytes[9], bytes[10], bytes[11]]);
+    if !(1..=1 << 16).contains(&w) || !(1..=1 << 16).contains(&h) {
+        return Err(Error::format(format, format!("invalid size {w}×{h}")));
+    }
+    Ok((w as usize, h as usize))
+}
+
 /// Reads a little-endian f32 at `offset` (caller checks bounds).
 fn f32_le(bytes: &[u8], offset: usize) -> f32 {
     f32::from_le_bytes([
