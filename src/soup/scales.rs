@@ -31,8 +31,9 @@
 //!    meet at equal scale (median |c₁| below `segment_gap`) are one rigid body with one scale;
 //!    union-find over such pairs gives the segments. (One scale per *hypothesis* is wrong on
 //!    dynamic scenes: several walkers can share one motion up to scale.)
-//! 2. *Segment scales* by coordinate descent on E from two starts (a maximum spanning tree of
-//!    the sharpest links, and every segment at median depth 1), each segment moving to the exact
+//! 2. *Segment scales* by coordinate descent on E from three starts (a maximum spanning tree of
+//!    the sharpest links; every segment at median depth 1; and TRW-S over offsets on a grid of
+//!    step σ, which moves groups of segments together), each segment moving to the exact
 //!    minimum of its terms (for truncated-linear terms it lies at one of the zero-gap points −c),
 //!    within a band of depth ratios around the largest segment. The lower energy wins.
 //! 3. *Tail control.* A piece whose depth disagrees with every neighbour in both frames while
@@ -49,6 +50,7 @@ use super::{Piece, Soup};
 use crate::camera::Intrinsics;
 use crate::flow::FlowField;
 use crate::grid::Grid;
+use crate::mrf::trws::{Mrf, TrwsOptions, trws};
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::BoundaryGraph;
 
@@ -82,7 +84,8 @@ pub struct ScaleParams {
     /// what it stands on, while its sides and top may or may not touch what is behind them.
     pub support_weight: f64,
     /// A piece's scale counts as known when its [`scale_confidence`] is at least this: moving
-    /// its rigid segment by 25 % breaks a tenth of the contacts on its rim.
+    /// its rigid segment by 25 % raises the energy of its rim by a tenth of what it would cost
+    /// to break every contact there if each were certain.
     pub min_confidence: f64,
     /// Flow jump (px) across a boundary below which the flow counts as continuous there
     /// (tail control: a depth edge needs a flow edge to be believed).
@@ -448,7 +451,7 @@ fn segment_centres(soup: &Soup, inputs: &ScaleInputs, segment: &[usize], count: 
         .collect()
 }
 
-/// Coordinate descent over segment offsets u (log-scale s = centre + u), from two starts;
+/// Coordinate descent over segment offsets u (log-scale s = centre + u), from three starts;
 /// returns the better u and the sweeps run.
 fn solve_segments(
     problem: &Problem,
@@ -490,6 +493,15 @@ fn solve_segments(
     let starts = [
         spanning_tree_start(problem, segment, centre, count, reference, band),
         vec![0.0; count],
+        discrete_start(
+            problem,
+            segment,
+            centre,
+            count,
+            reference,
+            band,
+            problem.sigma,
+        ),
     ];
     let mut best: Option<(f64, Vec<f64>)> = None;
     let mut sweeps = 0;
@@ -525,6 +537,29 @@ fn solve_segments(
     )
 }
 
+/// Every link between two different segments g < h, its terms as functions of d = u_g − u_h
+/// (segment offsets u, log-scale s = centre + u): Σ w min(|d + c|, σ) per segment pair.
+fn segment_pair_terms(
+    problem: &Problem,
+    segment: &[usize],
+    centre: &[f64],
+) -> std::collections::BTreeMap<(usize, usize), Vec<(f64, f64)>> {
+    let mut pairs: std::collections::BTreeMap<(usize, usize), Vec<(f64, f64)>> = Default::default();
+    for l in &problem.links {
+        let (ga, gb) = (segment[l.a], segment[l.b]);
+        if ga == gb {
+            continue;
+        }
+        // Seen from g with h's offset at 0: δ = (centre_a + u_a) − (centre_b + u_b).
+        let (g, h) = (ga.min(gb), ga.max(gb));
+        pairs
+            .entry((g, h))
+            .or_default()
+            .extend(l.seen_from(ga == g, centre[h] - centre[g]));
+    }
+    pairs
+}
+
 /// Start: a maximum spanning tree over segment pairs by how much their links weigh, walked from
 /// the reference segment; each segment takes the offset that best meets its tree parent.
 fn spanning_tree_start(
@@ -537,21 +572,7 @@ fn spanning_tree_start(
 ) -> Vec<f64> {
     let mut u = vec![0.0; count];
     let Some(root) = reference else { return u };
-    // Per segment pair (g < h): all terms as functions of u_g − u_h.
-    let mut pairs: std::collections::BTreeMap<(usize, usize), Vec<(f64, f64)>> = Default::default();
-    for l in &problem.links {
-        let (ga, gb) = (segment[l.a], segment[l.b]);
-        if ga == gb {
-            continue;
-        }
-        // As functions of d = u_g − u_h (g < h), seen from g with h's offset at 0:
-        // δ = (centre_a + u_a) − (centre_b + u_b).
-        let (g, h) = (ga.min(gb), ga.max(gb));
-        pairs
-            .entry((g, h))
-            .or_default()
-            .extend(l.seen_from(ga == g, centre[h] - centre[g]));
-    }
+    let pairs = segment_pair_terms(problem, segment, centre);
     let mut edges: Vec<((usize, usize), f64, f64)> = pairs
         .into_iter()
         .map(|(key, terms)| {
@@ -574,6 +595,62 @@ fn spanning_tree_start(
         }
     }
     u
+}
+
+/// Start: the segment offsets on a grid of step `discrete_step` within the band, all at once,
+/// by TRW-S over the segment graph (each pairwise table is the segments' links summed at each
+/// offset difference). Coordinate descent moves one segment at a time and stops where moving
+/// any single one breaks more contacts than it makes, e.g. a box glued to the wall behind it
+/// that would have to move together with the piece of floor it stands on; the joint labelling
+/// sees such moves. The reference segment stays at 0.
+fn discrete_start(
+    problem: &Problem,
+    segment: &[usize],
+    centre: &[f64],
+    count: usize,
+    reference: Option<usize>,
+    band: f64,
+    step: f64,
+) -> Vec<f64> {
+    let half = (band / step).ceil().max(1.0) as usize;
+    let labels = 2 * half + 1;
+    let offset = |l: usize| (l as f64 - half as f64) * step;
+    // Ties go to the segment's centre (offset 0) by a vanishing preference.
+    let unary = (0..count)
+        .map(|g| {
+            (0..labels)
+                .map(|l| {
+                    if Some(g) == reference && l != half {
+                        1e9
+                    } else {
+                        1e-9 * offset(l).abs()
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let mut mrf = Mrf::new(unary);
+    for ((g, h), terms) in segment_pair_terms(problem, segment, centre) {
+        // The table depends on d = u_g − u_h only: 2·labels − 1 values.
+        let by_difference: Vec<f64> = (0..2 * labels - 1)
+            .map(|k| {
+                truncated(
+                    &terms,
+                    (k as f64 - (labels - 1) as f64) * step,
+                    problem.sigma,
+                )
+            })
+            .collect();
+        let mut table = Vec::with_capacity(labels * labels);
+        for lg in 0..labels {
+            for lh in 0..labels {
+                table.push(by_difference[lg + labels - 1 - lh]);
+            }
+        }
+        mrf.add_edge(g, h, table);
+    }
+    let result = trws(&mrf, &TrwsOptions { iterations: 30 });
+    result.labels.into_iter().map(offset).collect()
 }
 
 /// Tail control: pieces whose depth disagrees with every touching neighbour in both frames
@@ -778,10 +855,14 @@ pub fn pair_weight(
 
 /// How strongly the contacts pin each piece's scale, in [0, 1]: the piece's rigid segment is
 /// moved by ±25 % in scale as a whole, and the smaller rise of the contact energy across the
-/// segment's rim is divided by the largest rise those contacts could make (all of them broken).
+/// segment's rim is divided by σ per touching neighbour, the rise if every contact on the rim
+/// were certain (weight 1) and broke. So a segment held only by weak evidence (contacts across
+/// colour edges, flow jumps or failed flow checks: what an object in front of a wall looks like)
+/// scores low even where all of them break.
 /// 0: nothing ties the segment to the rest (a mover touching nothing, or touching only through
-/// contacts it can slide along), so its scale is a guess; 1: every contact breaks. The largest
-/// segment fixes the global scale and gets 1. The soup's current λ are the scales examined.
+/// contacts it can slide along), so its scale is a guess; 1: every contact is certain and breaks.
+/// The largest segment fixes the global scale and gets 1. The soup's current λ are the scales
+/// examined.
 pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Vec<f64> {
     let n = soup.pieces.len();
     let problem = build_problem(soup, inputs, params);
@@ -798,7 +879,9 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
             continue;
         }
         let delta = s[l.a] - s[l.b];
-        let weight = l.full(problem.sigma);
+        // What the link could cost at most if every one of its contacts were certain
+        // (weight 1 per pair): weak evidence pins a segment weakly.
+        let weight = problem.sigma;
         for (j, d) in [-step, 0.0, step].into_iter().enumerate() {
             rise[ga][j] += l.value(delta + d, problem.sigma);
             rise[gb][j] += l.value(delta - d, problem.sigma);
@@ -890,5 +973,43 @@ mod tests {
             (h1 + 2f64.ln()).abs() < 1e-12 && (h2 + 2f64.ln()).abs() < 1e-12,
             "{h1} {h2}"
         );
+    }
+
+    #[test]
+    fn the_discrete_start_moves_segments_together() {
+        // Segments 1 and 2 are tied to each other (equal scales) and each, more weakly, to
+        // segment 0 at a log-scale 1 below it. Moving either alone breaks the strong tie, so
+        // coordinate descent from equal scales stays there; the joint labelling moves both.
+        let link = |a, b, w, c| Link {
+            a,
+            b,
+            terms: vec![(w, c)],
+            median_c1: c,
+            flow_jump: 0.0,
+        };
+        let links = vec![
+            link(0, 1, 0.6, -1.0),
+            link(0, 2, 0.6, -1.0),
+            link(1, 2, 1.0, 0.0),
+        ];
+        let problem = Problem {
+            touching: vec![vec![0, 1], vec![0, 2], vec![1, 2]],
+            links,
+            sigma: 0.1,
+        };
+        let segment = [0, 1, 2];
+        let centre = [0.0; 3];
+        let stuck = [0.0; 3];
+        let u = discrete_start(&problem, &segment, &centre, 3, Some(0), 12f64.ln(), 0.1);
+        assert!(u[0].abs() < 1e-12 && (u[1] + 1.0).abs() < 1e-9 && (u[2] + 1.0).abs() < 1e-9);
+        assert!(problem.energy(&u) < 1e-9);
+        // Each single move from equal scales raises the energy: the start coordinate descent
+        // could not leave.
+        for g in 1..3 {
+            let terms = problem.local_terms(g, &stuck);
+            let x = minimise_truncated(&terms, 0.1, 0.0, -2.0, 2.0);
+            assert_eq!(x, 0.0);
+        }
+        assert!(problem.energy(&stuck) > 0.1);
     }
 }
