@@ -387,7 +387,7 @@ pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams)
     let energy_start = problem.energy(&zero);
     let (segment, sizes) = rigid_segments(soup, &problem, &zero, params.segment_gap);
     let centre = segment_centres(soup, inputs, &segment, sizes.len());
-    let (u, sweeps) = solve_segments(&problem, &segment, &sizes, &centre, params);
+    let (u, sweeps) = solve_segments(&problem, &segment, &sizes, &centre, params, None);
     let mut s: Vec<f64> = segment.iter().map(|&g| u[g] + centre[g]).collect();
     let tail_pieces = tail_control(&problem, &mut s, params);
     let energy_end = problem.energy(&s);
@@ -406,6 +406,42 @@ pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams)
         tail_pieces,
         lambda_ratio: if n > 0 { hi / lo } else { 1.0 },
     }
+}
+
+/// Per-piece log-scales `start` made one per rigid segment (each segment at the median offset
+/// of its pieces), then, with `descend`, the segment solve (step 2 alone) from there instead of
+/// its own starts: the truth test's "truth as segments", which shows whether one scale per
+/// rigid segment can hold the truth and whether the segment solve's minimum lies below it.
+pub fn segment_descent_from(
+    soup: &Soup,
+    inputs: &ScaleInputs,
+    params: &ScaleParams,
+    start: &[f64],
+    descend: bool,
+) -> Vec<f64> {
+    let problem = build_problem(soup, inputs, params);
+    let zero = vec![0.0; soup.pieces.len()];
+    let (segment, sizes) = rigid_segments(soup, &problem, &zero, params.segment_gap);
+    let centre = segment_centres(soup, inputs, &segment, sizes.len());
+    let mut offsets = vec![Vec::new(); sizes.len()];
+    for (i, &g) in segment.iter().enumerate() {
+        if start[i].is_finite() {
+            offsets[g].push(start[i] - centre[g]);
+        }
+    }
+    let u0: Vec<f64> = offsets
+        .into_iter()
+        .map(|mut v| {
+            v.sort_by(f64::total_cmp);
+            v.get(v.len() / 2).copied().unwrap_or(0.0)
+        })
+        .collect();
+    let u = if descend {
+        solve_segments(&problem, &segment, &sizes, &centre, params, Some(u0)).0
+    } else {
+        u0
+    };
+    segment.iter().map(|&g| u[g] + centre[g]).collect()
 }
 
 /// Sets every piece's λ = e^(s_i), normalised so the median λ is 1.
@@ -459,6 +495,7 @@ fn solve_segments(
     sizes: &[usize],
     centre: &[f64],
     params: &ScaleParams,
+    only_start: Option<Vec<f64>>,
 ) -> (Vec<f64>, usize) {
     let count = sizes.len();
     let reference = (0..count).max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
@@ -490,19 +527,22 @@ fn solve_segments(
         }
         out
     };
-    let starts = [
-        spanning_tree_start(problem, segment, centre, count, reference, band),
-        vec![0.0; count],
-        discrete_start(
-            problem,
-            segment,
-            centre,
-            count,
-            reference,
-            band,
-            problem.sigma,
-        ),
-    ];
+    let starts = match only_start {
+        Some(start) => vec![start],
+        None => vec![
+            spanning_tree_start(problem, segment, centre, count, reference, band),
+            vec![0.0; count],
+            discrete_start(
+                problem,
+                segment,
+                centre,
+                count,
+                reference,
+                band,
+                problem.sigma,
+            ),
+        ],
+    };
     let mut best: Option<(f64, Vec<f64>)> = None;
     let mut sweeps = 0;
     for start in starts {

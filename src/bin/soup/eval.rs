@@ -333,10 +333,16 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     let solution: Vec<f64> = scaled.pieces.iter().map(|p| p.lambda.ln()).collect();
     let mut polished = oracle.clone();
     scales::polish(&problem, &mut polished, 50);
+    let as_segments = |descend| {
+        scales::segment_descent_from(&rec.unit_soup, &inputs, &params.scales, &oracle, descend)
+    };
+    let (segments, segments_solved) = (as_segments(false), as_segments(true));
     for (name, s) in [
         ("scale solve", &solution),
         ("truth", &oracle),
         ("truth polished", &polished),
+        ("truth as segments", &segments),
+        ("truth as segments, solved", &segments_solved),
     ] {
         println!(
             "| scales | {name} | {:.3} | {:.4} |",
