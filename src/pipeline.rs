@@ -130,6 +130,8 @@ pub struct Reconstruction {
     pub knn: KnnGraph,
     /// The soup before the scale solve (λ = 1: the "unorganised" soup).
     pub unit_soup: Soup,
+    /// The soup right after the scale solve, before the refinement (median λ = 1).
+    pub scaled_soup: Soup,
     /// The soup with relative scales, refined (median λ = 1: the "organised" soup).
     pub soup: Soup,
     /// Frame-1 depth at the working resolution (NaN = unknown).
@@ -203,6 +205,7 @@ pub fn reconstruct(
         intrinsics: &k,
     };
     let scales = solve_scales(&mut soup, &inputs, &params.scales);
+    let scaled_soup = soup.clone();
     timings.push((Stage::Scales, clock.lap()));
 
     progress(Stage::Refine, 0.0);
@@ -256,6 +259,7 @@ pub fn reconstruct(
         boundaries,
         knn,
         unit_soup,
+        scaled_soup,
         soup,
         depth,
         depth_input,

@@ -94,7 +94,14 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
     // Working size 128 × 55 (downscaled from 192 × 82).
     let (w, h) = (result.width() as usize, result.height() as usize);
     assert_eq!((w, h), (128, 55));
-    for name in ["depth", "unorganised", "superpixels", "flow", "confidence"] {
+    for name in [
+        "depth",
+        "unorganised",
+        "scaled",
+        "superpixels",
+        "flow",
+        "confidence",
+    ] {
         assert_eq!(result.picture(name).unwrap().len(), 4 * w * h, "{name}");
     }
     assert!(result.picture("albedo").is_err());
@@ -106,8 +113,15 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
     assert_eq!(cloud.positions2().length() as usize, 3 * count);
     assert_eq!(cloud.colours().length() as usize, 3 * count);
     assert_eq!(cloud.labels().length() as usize, count);
-    let unorganised = result.cloud("unorganised").unwrap();
-    assert_eq!(unorganised.labels().length(), unorganised.count());
+    for stage in ["unorganised", "scaled"] {
+        let cloud = result.cloud(stage).unwrap();
+        assert_eq!(cloud.labels().length(), cloud.count(), "{stage}");
+        assert!(
+            cloud.count() as usize > w * h / 2,
+            "{stage}: {} points",
+            cloud.count()
+        );
+    }
     assert!(result.cloud("stew").is_err());
 
     let ply = ply::decode(&result.export_file("frame1.ply").unwrap()).unwrap();

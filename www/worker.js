@@ -9,7 +9,7 @@
 //   { type: 'intrinsics', width, height, focal35mm }        → { camera: { intrinsics, source } }
 //   { type: 'run', frames: [ImageBitmap, ImageBitmap], options }
 //       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below)
-//   { type: 'cloud', soup: 'organised' | 'unorganised' }    → { cloud }
+//   { type: 'cloud', soup: 'organised' | 'scaled' | 'unorganised' } → { cloud }
 //   { type: 'export', name }                                → { bytes: ArrayBuffer, mediaType }
 //   { type: 'score-depth', name, bytes, pngScale }          → { score, picture: RGBA at the
 //       working size } (ground-truth depth of frame 1: PFM, .dpt or 16-bit PNG; see

@@ -321,14 +321,20 @@ impl PageReconstruction {
         serde_json::to_vec_pretty(&report).map_err(json)
     }
 
-    /// Frame-1 depth of the unit-scale soup (every superpixel at λ = 1, before the scale solve).
-    fn unorganised_depth(&self) -> crate::Grid<f32> {
+    /// The soup of a stage: `"unorganised"` (every superpixel at λ = 1, before the scale solve)
+    /// or `"scaled"` (after the scale solve, before the refinement); `None` for another name.
+    fn stage_soup(&self, name: &str) -> Option<&crate::soup::Soup> {
+        match name {
+            "unorganised" => Some(&self.rec.unit_soup),
+            "scaled" => Some(&self.rec.scaled_soup),
+            _ => None,
+        }
+    }
+
+    /// Frame-1 depth of `soup` at the working resolution.
+    fn depth_of(&self, soup: &crate::soup::Soup) -> crate::Grid<f32> {
         let rec = &self.rec;
-        dense_depth(
-            &rec.unit_soup,
-            &rec.superpixels.labels,
-            &rec.report.camera.intrinsics,
-        )
+        dense_depth(soup, &rec.superpixels.labels, &rec.report.camera.intrinsics)
     }
 }
 
@@ -347,42 +353,43 @@ impl PageReconstruction {
     }
 
     /// The point clouds of both frames, one point per pixel with a depth: `"organised"` (the
-    /// solved relative scales, the result) or `"unorganised"` (every superpixel at unit scale
-    /// λ = 1, before the scale solve: the paper's Fig. 5).
+    /// result: solved scales, refined), `"scaled"` (after the scale solve, before the
+    /// refinement) or `"unorganised"` (every superpixel at unit scale λ = 1, before the scale
+    /// solve: the paper's Fig. 5).
     pub fn cloud(&self, soup: &str) -> Result<CloudBuffers, JsError> {
         let labels = &self.rec.superpixels.labels;
         let k = &self.rec.report.camera.intrinsics;
-        let cloud = match soup {
-            "organised" => CloudBuffers::new(
+        if soup == "organised" {
+            return Ok(CloudBuffers::new(
                 &self.rec.cloud1,
                 &self.rec.cloud2,
                 cloud_labels(labels, &self.rec.depth),
-            ),
-            "unorganised" => {
-                let depth = self.unorganised_depth();
-                let (c1, c2) = point_clouds(&self.rec.unit_soup, labels, &depth, &self.frame1, k);
-                CloudBuffers::new(&c1, &c2, cloud_labels(labels, &depth))
-            }
-            other => {
-                return Err(JsError::new(&format!(
-                    "unknown soup {other:?}; choose organised or unorganised"
-                )));
-            }
-        };
-        Ok(cloud)
+            ));
+        }
+        let stage = self.stage_soup(soup).ok_or_else(|| {
+            JsError::new(&format!(
+                "unknown soup {soup:?}; choose organised, scaled or unorganised"
+            ))
+        })?;
+        let depth = self.depth_of(stage);
+        let (c1, c2) = point_clouds(stage, labels, &depth, &self.frame1, k);
+        Ok(CloudBuffers::new(&c1, &c2, cloud_labels(labels, &depth)))
     }
 
     /// A picture at the working resolution as RGBA bytes (`4 · width · height`, opaque), ready
     /// for `new ImageData(...)`: `"depth"` (frame-1 depth, near warm, far cool, unknown black),
     /// `"unorganised"` (the same for the soup at unit scales, before the scale solve),
+    /// `"scaled"` (the same after the scale solve, before the refinement),
     /// `"superpixels"` (frame 1 with superpixel boundaries), `"flow"` (the flow used, Middlebury
     /// colours, untrusted vectors darker), `"confidence"` (frame 1 with the superpixels whose
     /// scale no contact pins tinted magenta: their depth is a guess).
     pub fn picture(&self, name: &str) -> Result<Vec<u8>, JsError> {
         let rec = &self.rec;
+        if let Some(stage) = self.stage_soup(name) {
+            return Ok(rgba(&depth_picture(&self.depth_of(stage))));
+        }
         let frame = match name {
             "depth" => depth_picture(&rec.depth),
-            "unorganised" => depth_picture(&self.unorganised_depth()),
             "superpixels" => boundary_overlay(&self.frame1, &rec.superpixels, [255, 230, 0]),
             "flow" => flow_picture_with_reliability(&rec.flow, &rec.reliable),
             "confidence" => confidence_picture(
@@ -393,7 +400,7 @@ impl PageReconstruction {
             ),
             other => {
                 return Err(JsError::new(&format!(
-                    "unknown picture {other:?}; choose depth, unorganised, superpixels, flow or confidence"
+                    "unknown picture {other:?}; choose depth, unorganised, scaled, superpixels, flow or confidence"
                 )));
             }
         };

@@ -67,9 +67,13 @@ test('the sample through the file input, drawn with WebGPU, with every download'
   await page.check('input[name="frame"][value="2"]');
   const frame2 = await analyseView(page);
   assert.ok(difference(frame1, frame2) > 0.05, 'frame 2 looks like frame 1');
-  // The unorganised soup (unit scales) is another cloud.
-  await page.selectOption('#soup-mode', 'unorganised');
-  await page.waitForFunction(() => window.soupPage.viewer.pointCount > 0);
+  // The soup of each stage is another cloud: unit scales, and scales before the refinement.
+  for (const stage of ['unorganised', 'scaled']) {
+    await page.selectOption('#soup-mode', stage);
+    await page.waitForFunction(() => window.soupPage.viewer.pointCount > 0);
+    const view = await analyseView(page);
+    assert.ok(view.drawn > 0.1, `${stage}: only ${view.drawn} of the view is drawn`);
+  }
   await page.selectOption('#soup-mode', 'organised');
 
   // Stage pictures at the working size, not blank.

@@ -1,7 +1,8 @@
 // The 3D view: loads the full wasm module (with the viewer) once the worker is ready, so that on
 // a slow network the worker's smaller module comes first and the page is usable sooner; shows
-// the result's cloud, switches between the organised and unorganised soup, and connects the
-// viewer's controls (www/viewer-controls.js). The page works without the viewer.
+// the result's cloud, switches between the soups of the stages (unorganised, scaled,
+// organised), and connects the viewer's controls (www/viewer-controls.js). The page works
+// without the viewer.
 //
 // GPU loss: when the WebGPU device is lost (the viewer's `viewerlost` event on window) or the
 // WebGL2 context is lost (`webglcontextlost` on the canvas: a driver reset, a phone putting the
@@ -19,7 +20,7 @@ const BACKEND_NAMES = { webgpu: 'WebGPU', webgl2: 'WebGL2' };
 
 /** The wasm module with the viewer, once loaded. */
 let wasm = null;
-/** The soup shown ('organised' or 'unorganised'), asked of the worker again after a loss. */
+/** The soup shown ('organised', 'scaled' or 'unorganised'), asked of the worker again after a loss. */
 let soupShown = 'organised';
 /** A recovery in progress (one at a time). */
 let restoring = null;
@@ -145,7 +146,7 @@ export async function showCloud(cloud, soup = 'organised') {
   }
 }
 
-/** Shows the soup chosen in #soup-mode: organised (solved scales) or unorganised (λ = 1). */
+/** Shows the soup chosen in #soup-mode: organised (the result), scaled (before the refinement) or unorganised (λ = 1). */
 export async function switchSoup() {
   const viewer = await page.viewerReady;
   const soup = $('soup-mode').value;
