@@ -1,13 +1,16 @@
 //! Everything the viewer shows and how, independent of the GPU: the cloud and the subset of it
 //! that is drawn, the point colours, the camera and its gestures, and the display settings.
-//! The GPU part (`gpu`, wasm only) uploads what this produces: the packed point
-//! buffers when their version changes, and the [`Uniforms`] every frame.
+//! The GPU part (`gpu`, wasm only) uploads what this produces: the packed points, a slice at a
+//! time ([`View::pack_positions`], [`View::pack_colours`]) when their version changes, and the
+//! [`Uniforms`] every frame. The view keeps no packed copy of the cloud: a 1024 × 768
+//! reconstruction is 786 432 points, 24 MB as a [`PointCloud`], and its packed form would be
+//! another 31 MB.
 
 use super::{RenderError, Result};
 
 use super::camera::{Bounds, Camera, DEFAULT_FOV_Y, Viewport};
 use super::cloud::PointCloud;
-use super::colour::{ColourMode, point_colours};
+use super::colour::{ColourMode, Colouring};
 use super::controls::{Controls, Drag};
 use super::decimate::{DESKTOP_POINT_BUDGET, decimate};
 
@@ -58,13 +61,12 @@ impl Uniforms {
 #[derive(Clone, Debug)]
 pub struct View {
     cloud: PointCloud,
-    shown: Vec<u32>,
+    /// Indices of the drawn points (ascending), or `None` when every point is drawn.
+    shown: Option<Vec<u32>>,
     budget: usize,
     colour_mode: ColourMode,
-    /// Per shown point: (x, y, z, 1) in frame 1 then (x, y, z, 1) in frame 2.
-    positions: Vec<[f32; 4]>,
-    /// Per shown point: RGBA in frame 1 then RGBA in frame 2.
-    colours: Vec<[u8; 4]>,
+    /// The colour map's inverse-depth range (of the whole cloud's frame-1 depths).
+    depth_range: (f32, f32),
     positions_version: u64,
     colours_version: u64,
     bounds: Bounds,
@@ -95,11 +97,10 @@ impl View {
         };
         let mut view = View {
             cloud: PointCloud::default(),
-            shown: Vec::new(),
+            shown: None,
             budget: budget.max(1),
             colour_mode: ColourMode::Rgb,
-            positions: Vec::new(),
-            colours: Vec::new(),
+            depth_range: (0.0, 1.0),
             positions_version: 0,
             colours_version: 0,
             bounds: Bounds::of_points(&[]),
@@ -124,9 +125,18 @@ impl View {
         if self.colour_mode == ColourMode::Superpixel && self.cloud.labels().is_none() {
             self.colour_mode = ColourMode::Rgb;
         }
+        self.depth_range = Colouring::depth_range(&self.cloud);
         self.select_points();
         self.bounds = Bounds::of_points(self.cloud.pos1().iter().chain(self.cloud.pos2()));
         self.reset_view();
+    }
+
+    /// Takes the cloud out (the view is left empty), e.g. to free its memory before a new one
+    /// is built.
+    pub fn take_cloud(&mut self) -> PointCloud {
+        let cloud = std::mem::take(&mut self.cloud);
+        self.set_cloud(PointCloud::default());
+        cloud
     }
 
     /// Puts the camera where `camera` says (e.g. the camera of an earlier viewer of the same
@@ -151,7 +161,7 @@ impl View {
     /// Recolours the points. Fails, leaving the mode unchanged, for superpixel colours on a
     /// cloud without labels.
     pub fn set_colour_mode(&mut self, mode: ColourMode) -> Result<()> {
-        self.colours = point_colours(&self.cloud, &self.shown, mode)?;
+        Colouring::new(&self.cloud, mode, self.depth_range)?;
         self.colour_mode = mode;
         self.colours_version += 1;
         Ok(())
@@ -231,11 +241,25 @@ impl View {
 
     /// Back to the home view ([`Camera::home`]) for the current field of view and aspect ratio.
     pub fn reset_view(&mut self) {
-        let mut framed: Vec<[f32; 3]> = Vec::with_capacity(2 * self.shown.len());
-        framed.extend(self.shown.iter().map(|&i| self.cloud.pos1()[i as usize]));
-        framed.extend(self.shown.iter().map(|&i| self.cloud.pos2()[i as usize]));
-        self.home = Camera::home(&framed, self.fov_y, self.viewport.aspect());
+        let (pos1, pos2) = (self.cloud.pos1(), self.cloud.pos2());
+        let framed = || {
+            let shown = || self.shown_range(0, usize::MAX);
+            shown().map(|i| pos1[i]).chain(shown().map(|i| pos2[i]))
+        };
+        self.home = Camera::home_of(framed, self.fov_y, self.viewport.aspect());
         self.camera = self.home;
+    }
+
+    /// Indices into the cloud of the drawn points `first..first + count` (clipped to the drawn
+    /// points), ascending.
+    fn shown_range(&self, first: usize, count: usize) -> impl Iterator<Item = usize> + '_ {
+        let len = self.shown_len();
+        let range = first.min(len)..first.saturating_add(count).min(len);
+        let (all, some): (std::ops::Range<usize>, &[u32]) = match &self.shown {
+            None => (range, &[]),
+            Some(shown) => (0..0, &shown[range]),
+        };
+        all.chain(some.iter().map(|&i| i as usize))
     }
 
     /// A pointer went down at (`x`, `y`) CSS pixels from the canvas's top left; `drag` is what
@@ -276,7 +300,7 @@ impl View {
 
     /// Number of points drawn.
     pub fn shown_len(&self) -> usize {
-        self.shown.len()
+        self.shown.as_ref().map_or(self.cloud.len(), Vec::len)
     }
 
     /// Number of points in the cloud (before decimation).
@@ -284,15 +308,39 @@ impl View {
         self.cloud.len()
     }
 
-    /// Packed positions of the drawn points (two RGBA32F texels each: X then X', w = 1), and
-    /// their version (it changes whenever they do).
-    pub fn positions(&self) -> (&[[f32; 4]], u64) {
-        (&self.positions, self.positions_version)
+    /// The version of the drawn points' positions: it changes whenever they do.
+    pub fn positions_version(&self) -> u64 {
+        self.positions_version
     }
 
-    /// Packed colours of the drawn points (frame-1 RGBA then frame-2 RGBA), and their version.
-    pub fn colours(&self) -> (&[[u8; 4]], u64) {
-        (&self.colours, self.colours_version)
+    /// The version of the drawn points' colours: it changes whenever they do.
+    pub fn colours_version(&self) -> u64 {
+        self.colours_version
+    }
+
+    /// Appends to `out` the packed positions of the drawn points `first..first + count`
+    /// (clipped to the drawn points): two RGBA32F texels each, X then X', w = 1.
+    pub fn pack_positions(&self, first: usize, count: usize, out: &mut Vec<[f32; 4]>) {
+        let homogeneous = |[x, y, z]: [f32; 3]| [x, y, z, 1.0];
+        let (pos1, pos2) = (self.cloud.pos1(), self.cloud.pos2());
+        for i in self.shown_range(first, count) {
+            out.extend([homogeneous(pos1[i]), homogeneous(pos2[i])]);
+        }
+    }
+
+    /// Appends to `out` the packed colours of the drawn points `first..first + count` (clipped
+    /// to the drawn points): frame-1 RGBA then frame-2 RGBA each, in the current colour mode.
+    pub fn pack_colours(&self, first: usize, count: usize, out: &mut Vec<[u8; 4]>) {
+        // The mode was checked against the cloud when it was set (set_cloud falls back to RGB
+        // without labels); white is what a point would get otherwise.
+        match Colouring::new(&self.cloud, self.colour_mode, self.depth_range) {
+            Ok(colouring) => {
+                for i in self.shown_range(first, count) {
+                    out.extend(colouring.pair(i));
+                }
+            }
+            Err(_) => out.extend(self.shown_range(first, count).flat_map(|_| [[255; 4]; 2])),
+        }
     }
 
     pub fn camera(&self) -> &Camera {
@@ -328,21 +376,11 @@ impl View {
         self.background
     }
 
-    /// Re-selects the drawn points under the budget and repacks positions and colours.
+    /// Re-selects the drawn points under the budget; their positions and colours change.
     fn select_points(&mut self) {
-        self.shown = decimate(self.cloud.len(), self.budget);
-        let homogeneous = |[x, y, z]: [f32; 3]| [x, y, z, 1.0];
-        self.positions = Vec::with_capacity(self.shown.len() * 2);
-        for &i in &self.shown {
-            self.positions
-                .push(homogeneous(self.cloud.pos1()[i as usize]));
-            self.positions
-                .push(homogeneous(self.cloud.pos2()[i as usize]));
-        }
+        let n = self.cloud.len();
+        self.shown = (n > self.budget).then(|| decimate(n, self.budget));
         self.positions_version += 1;
-        // The mode was valid for the cloud (set_cloud falls back to RGB without labels).
-        self.colours = point_colours(&self.cloud, &self.shown, self.colour_mode)
-            .unwrap_or_else(|_| vec![[255; 4]; 2 * self.shown.len()]);
         self.colours_version += 1;
     }
 }
@@ -352,6 +390,14 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+
+    /// All packed positions and colours of the drawn points.
+    fn packed(view: &View) -> (Vec<[f32; 4]>, Vec<[u8; 4]>) {
+        let (mut positions, mut colours) = (Vec::new(), Vec::new());
+        view.pack_positions(0, usize::MAX, &mut positions);
+        view.pack_colours(0, usize::MAX, &mut colours);
+        (positions, colours)
+    }
 
     #[test]
     fn a_camera_carries_over_to_another_view_of_the_same_cloud() {
@@ -401,18 +447,18 @@ mod tests {
         let mut view = View::default();
         view.set_viewport(800, 600, 2.0);
         view.set_cloud(two_point_cloud(None));
-        let (positions, version) = view.positions();
+        let (positions, colours) = packed(&view);
         assert_eq!(
             positions,
-            &[
+            [
                 [0.0, 0.0, 4.0, 1.0],
                 [0.5, 0.0, 4.0, 1.0],
                 [1.0, 0.5, 6.0, 1.0],
                 [1.0, 0.5, 6.0, 1.0]
             ]
         );
-        assert!(version > 0);
-        assert_eq!(view.colours().0.len(), 4);
+        assert!(view.positions_version() > 0);
+        assert_eq!(colours.len(), 4);
         assert!(view.camera().eye().abs_diff_eq(Vec3::ZERO, 1e-4));
         let u = view.uniforms();
         assert_eq!(u.viewport_px, [800.0, 600.0]);
@@ -427,12 +473,19 @@ mod tests {
         let mut view = View::new(100);
         view.set_cloud(cloud);
         assert_eq!((view.shown_len(), view.cloud_len()), (100, 1000));
-        let (_, before) = view.positions();
+        let before = view.positions_version();
         view.set_point_budget(400);
         assert_eq!(view.shown_len(), 400);
-        assert_eq!(view.positions().0.len(), 400 * 2);
-        assert_eq!(view.colours().0.len(), 400 * 2);
-        assert!(view.positions().1 > before);
+        let (positions, colours) = packed(&view);
+        assert_eq!(positions.len(), 400 * 2);
+        assert_eq!(colours.len(), 400 * 2);
+        assert!(view.positions_version() > before);
+        // Packing in slices gives the same as packing at once.
+        let mut sliced = Vec::new();
+        for first in (0..400).step_by(64) {
+            view.pack_positions(first, 64, &mut sliced);
+        }
+        assert_eq!(sliced, positions);
     }
 
     #[test]
@@ -461,7 +514,7 @@ mod tests {
         view.set_colour_mode(ColourMode::Superpixel).unwrap();
         view.set_cloud(two_point_cloud(None));
         assert_eq!(view.colour_mode(), ColourMode::Rgb);
-        assert_eq!(view.colours().0[0], [255, 0, 0, 255]);
+        assert_eq!(packed(&view).1[0], [255, 0, 0, 255]);
     }
 
     #[test]
