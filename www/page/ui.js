@@ -50,6 +50,21 @@ export const page = {
 };
 window.soupPage = page;
 
+/**
+ * Hands the memory of typed arrays (or ArrayBuffers) no longer needed back at once, rather than
+ * at the next garbage collection, which may come late: a 1024 × 768 result brings 24 MB of cloud
+ * and 16 MB of pictures. `ArrayBuffer.prototype.transfer(0)` detaches a buffer, which frees its
+ * contents; where the browser lacks it, this does nothing.
+ */
+export function freeArrays(...arrays) {
+  for (const array of arrays) {
+    const buffer = array?.buffer ?? array;
+    if (buffer instanceof ArrayBuffer && !buffer.detached) {
+      buffer.transfer?.(0);
+    }
+  }
+}
+
 export function setState(state) {
   document.body.dataset.state = state;
   const running = state === 'running';

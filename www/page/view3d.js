@@ -13,7 +13,7 @@
 
 import { CancelledError } from '../pipeline.js';
 import { wireViewerControls } from '../viewer-controls.js';
-import { $, BACKEND, page, showAlert } from './ui.js';
+import { $, BACKEND, freeArrays, page, showAlert } from './ui.js';
 
 const BACKEND_NAMES = { webgpu: 'WebGPU', webgl2: 'WebGL2' };
 
@@ -110,6 +110,7 @@ async function restore(what, { backend, camera }) {
     if (page.points > 0) {
       const { cloud } = await page.pipeline.request('cloud', { soup: soupShown });
       viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
+      freeCloud(cloud);
       viewer.setCamera(camera);
     }
     viewer.setMorph(Number($('morph').value));
@@ -134,7 +135,10 @@ async function restore(what, { backend, camera }) {
   }
 }
 
-/** Shows `cloud` (positions in both frames, colours, labels) in the 3D view, if there is one. */
+/**
+ * Shows `cloud` (positions in both frames, colours, labels) in the 3D view, if there is one.
+ * The cloud's arrays are freed (the viewer has its own copy; the worker gives it again).
+ */
 export async function showCloud(cloud, soup = 'organised') {
   const viewer = await page.viewerReady;
   soupShown = soup;
@@ -143,6 +147,11 @@ export async function showCloud(cloud, soup = 'organised') {
     page.viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
     page.viewer.render();
   }
+  freeCloud(cloud);
+}
+
+function freeCloud(cloud) {
+  freeArrays(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
 }
 
 /** Shows the soup chosen in #soup-mode: organised (solved scales) or unorganised (λ = 1). */
