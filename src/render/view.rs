@@ -23,6 +23,40 @@ pub const MAX_POINT_SIZE: f32 = 64.0;
 /// Default background: the page's dark header colour.
 pub const DEFAULT_BACKGROUND: [u8; 3] = [0x1d, 0x23, 0x30];
 
+/// How the points of flagged superpixels (e.g. those whose scale is unknown) are shown.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FlagStyle {
+    /// Like every other point.
+    #[default]
+    Show,
+    /// In [`FLAG_COLOUR`], whatever the colour mode.
+    Mark,
+    /// Not drawn.
+    Hide,
+}
+
+impl std::str::FromStr for FlagStyle {
+    type Err = RenderError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "show" => Ok(FlagStyle::Show),
+            "mark" => Ok(FlagStyle::Mark),
+            "hide" => Ok(FlagStyle::Hide),
+            other => Err(RenderError::InvalidParameter(format!(
+                "flagged points are \"show\", \"mark\" or \"hide\", not {other:?}"
+            ))),
+        }
+    }
+}
+
+/// Flagged superpixel labels must be below this (a reconstruction has thousands).
+pub const MAX_FLAGGED_LABEL: u32 = 1 << 24;
+
+/// The colour of marked points: magenta, the tint of the page's confidence picture
+/// (`output::confidence_picture`).
+pub const FLAG_COLOUR: [u8; 4] = [255, 0, 200, 255];
+
 /// The per-frame shader parameters, laid out as the WGSL `Uniforms` struct of `points.wgsl`
 /// (80 bytes).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -67,6 +101,9 @@ pub struct View {
     colour_mode: ColourMode,
     /// The colour map's inverse-depth range (of the whole cloud's frame-1 depths).
     depth_range: (f32, f32),
+    /// Per superpixel label: whether its points are flagged (labels past the end are not).
+    flagged: Vec<bool>,
+    flag_style: FlagStyle,
     positions_version: u64,
     colours_version: u64,
     bounds: Bounds,
@@ -101,6 +138,8 @@ impl View {
             budget: budget.max(1),
             colour_mode: ColourMode::Rgb,
             depth_range: (0.0, 1.0),
+            flagged: Vec::new(),
+            flag_style: FlagStyle::Show,
             positions_version: 0,
             colours_version: 0,
             bounds: Bounds::of_points(&[]),
@@ -129,6 +168,36 @@ impl View {
         self.select_points();
         self.bounds = Bounds::of_points(self.cloud.pos1().iter().chain(self.cloud.pos2()));
         self.reset_view();
+    }
+
+    /// Flags the points of the superpixels `labels` (replacing earlier flags; they stay for
+    /// later clouds) and shows flagged points in `style`. Points of a cloud without labels are
+    /// never flagged. Hiding keeps the camera where it is. Fails, changing nothing, for a label
+    /// of [`MAX_FLAGGED_LABEL`] or more.
+    pub fn set_flagged(&mut self, labels: &[u32], style: FlagStyle) -> Result<()> {
+        if let Some(&label) = labels.iter().find(|&&l| l >= MAX_FLAGGED_LABEL) {
+            return Err(RenderError::InvalidParameter(format!(
+                "superpixel label {label} is too large to flag (at most {})",
+                MAX_FLAGGED_LABEL - 1
+            )));
+        }
+        let len = labels.iter().max().map_or(0, |&l| l as usize + 1);
+        self.flagged = vec![false; len];
+        for &label in labels {
+            self.flagged[label as usize] = true;
+        }
+        self.flag_style = style;
+        self.select_points();
+        Ok(())
+    }
+
+    /// Whether point `i` of the cloud is flagged.
+    fn is_flagged(&self, i: usize) -> bool {
+        self.cloud
+            .labels()
+            .and_then(|labels| self.flagged.get(labels[i] as usize))
+            .copied()
+            .unwrap_or(false)
     }
 
     /// Takes the cloud out (the view is left empty), e.g. to free its memory before a new one
@@ -335,8 +404,13 @@ impl View {
         // without labels); white is what a point would get otherwise.
         match Colouring::new(&self.cloud, self.colour_mode, self.depth_range) {
             Ok(colouring) => {
+                let mark = self.flag_style == FlagStyle::Mark;
                 for i in self.shown_range(first, count) {
-                    out.extend(colouring.pair(i));
+                    if mark && self.is_flagged(i) {
+                        out.extend([FLAG_COLOUR; 2]);
+                    } else {
+                        out.extend(colouring.pair(i));
+                    }
                 }
             }
             Err(_) => out.extend(self.shown_range(first, count).flat_map(|_| [[255; 4]; 2])),
@@ -379,7 +453,20 @@ impl View {
     /// Re-selects the drawn points under the budget; their positions and colours change.
     fn select_points(&mut self) {
         let n = self.cloud.len();
-        self.shown = (n > self.budget).then(|| decimate(n, self.budget));
+        self.shown = if self.flag_style == FlagStyle::Hide && self.flagged.contains(&true) {
+            let kept: Vec<u32> = (0..n)
+                .filter(|&i| !self.is_flagged(i))
+                .map(|i| i as u32)
+                .collect();
+            let chosen = decimate(kept.len(), self.budget);
+            Some(if chosen.len() == kept.len() {
+                kept
+            } else {
+                chosen.iter().map(|&k| kept[k as usize]).collect()
+            })
+        } else {
+            (n > self.budget).then(|| decimate(n, self.budget))
+        };
         self.positions_version += 1;
         self.colours_version += 1;
     }
@@ -486,6 +573,34 @@ mod tests {
             view.pack_positions(first, 64, &mut sliced);
         }
         assert_eq!(sliced, positions);
+    }
+
+    #[test]
+    fn flagged_superpixels_are_marked_or_hidden() {
+        let mut view = View::default();
+        view.set_cloud(two_point_cloud(Some(&[3, 4])));
+        view.set_flagged(&[4], FlagStyle::Mark).unwrap();
+        let (_, colours) = packed(&view);
+        assert_eq!(
+            colours,
+            [[255, 0, 0, 255], [255, 0, 0, 255], FLAG_COLOUR, FLAG_COLOUR]
+        );
+        view.set_flagged(&[4], FlagStyle::Hide).unwrap();
+        assert_eq!((view.shown_len(), view.cloud_len()), (1, 2));
+        assert_eq!(
+            packed(&view).0,
+            [[0.0, 0.0, 4.0, 1.0], [0.5, 0.0, 4.0, 1.0]]
+        );
+        // The flags stay for the next cloud; a cloud without labels has nothing flagged.
+        view.set_cloud(two_point_cloud(Some(&[4, 4])));
+        assert_eq!(view.shown_len(), 0);
+        view.set_cloud(two_point_cloud(None));
+        assert_eq!(view.shown_len(), 2);
+        view.set_flagged(&[], FlagStyle::Hide).unwrap();
+        assert!(view.set_flagged(&[u32::MAX], FlagStyle::Hide).is_err());
+        view.set_cloud(two_point_cloud(Some(&[3, 4])));
+        assert_eq!(view.shown_len(), 2);
+        assert!("blink".parse::<FlagStyle>().is_err());
     }
 
     #[test]

@@ -38,7 +38,7 @@ use crate::render::colour::ColourMode;
 use crate::render::controls::Drag;
 use crate::render::decimate::{DESKTOP_POINT_BUDGET, MOBILE_POINT_BUDGET};
 use crate::render::gpu::{BackendChoice, Gpu};
-use crate::render::view::View;
+use crate::render::view::{FlagStyle, View};
 
 /// What the viewer owns besides its event listeners: the state, the GPU and the canvas.
 struct Inner {
@@ -262,6 +262,17 @@ impl Viewer {
             view.set_cloud(cloud);
             Ok(())
         })
+    }
+
+    /// Flags the points of the superpixels `labels` (a `Uint32Array` or an array of numbers; the
+    /// page flags those whose scale is unknown) and shows them as `style` says: `"show"` (like
+    /// the others), `"mark"` (magenta, whatever the colour mode) or `"hide"` (not drawn:
+    /// `shownPointCount` drops). The flags stay for later clouds of the same labels. Throws for
+    /// another style or a label of 2²⁴ or more.
+    #[wasm_bindgen(js_name = setFlagged)]
+    pub fn set_flagged(&self, labels: Vec<u32>, style: &str) -> Result<(), JsError> {
+        let style: FlagStyle = style.parse()?;
+        self.update(|view| view.set_flagged(&labels, style))
     }
 
     /// Morph parameter t in [0, 1]: points are drawn at X + t·(X' − X), so 0 is frame 1, 1 is

@@ -29,6 +29,8 @@ export const page = {
   workingSize: null,
   /** Point count of the last result's (organised) cloud; the worker keeps the cloud itself. */
   points: 0,
+  /** Labels of the last result's superpixels whose scale no contact pins (report confidence). */
+  unconfident: [],
   /** The 3D viewer in use (replaced after a lost GPU device or context), or null. */
   viewer: null,
   /** Resolves to the first viewer, or null when the 3D view cannot run (set by view3d.js). */

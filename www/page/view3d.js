@@ -48,6 +48,7 @@ export function loadViewer() {
       wasm = await import('../pkg/superpixel_soup.js');
       await wasm.default();
       const viewer = await openViewer($('view'), BACKEND);
+      viewer.setFlagged(page.unconfident, $('unknown-scale').value);
       page.viewer = viewer;
       page.viewerReadyMs = performance.now();
       document.body.dataset.backend = viewer.backend;
@@ -107,6 +108,7 @@ async function restore(what, { backend, camera }) {
   canvas.replaceWith(fresh);
   try {
     const viewer = await openViewer(fresh, backend);
+    viewer.setFlagged(page.unconfident, $('unknown-scale').value);
     if (page.points > 0) {
       const { cloud } = await page.pipeline.request('cloud', { soup: soupShown });
       viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
@@ -144,6 +146,7 @@ export async function showCloud(cloud, soup = 'organised') {
   soupShown = soup;
   await restoring;
   if (viewer !== null && page.viewer !== null) {
+    showUnknownScale();
     page.viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
     page.viewer.render();
   }
@@ -152,6 +155,14 @@ export async function showCloud(cloud, soup = 'organised') {
 
 function freeCloud(cloud) {
   freeArrays(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
+}
+
+/**
+ * Flags the superpixels of the last result whose scale no contact pins (`page.unconfident`) in
+ * the 3D view, shown as #unknown-scale says: like the others, marked magenta, or hidden.
+ */
+export function showUnknownScale() {
+  page.viewer?.setFlagged(page.unconfident, $('unknown-scale').value);
 }
 
 /** Shows the soup chosen in #soup-mode: organised (solved scales) or unorganised (λ = 1). */
