@@ -11,6 +11,7 @@ use crate::flow::resize_flow;
 use crate::formats::ply::{self, Encoding};
 use crate::formats::{flo, pfm, png16};
 use crate::image::encode_png;
+use crate::output::cloud_labels;
 use crate::pipeline::Reconstruction;
 
 /// One output file of a reconstruction.
@@ -94,12 +95,30 @@ pub fn encode(rec: &Reconstruction, file: ExportFile, ply_encoding: Encoding) ->
         ExportFile::DepthPfm => Ok(pfm::encode(&rec.depth_input)),
         ExportFile::DepthPng16 => png16::encode_depth(&rec.depth_input),
         ExportFile::DepthPicture => encode_png(&depth_picture(&rec.depth_input)),
-        ExportFile::Frame1Ply => ply::encode(&rec.cloud1, ply_encoding),
-        ExportFile::Frame2Ply => ply::encode(&rec.cloud2, ply_encoding),
+        ExportFile::Frame1Ply => {
+            ply::encode_with_confidence(&rec.cloud1, Some(&point_confidence(rec)), ply_encoding)
+        }
+        ExportFile::Frame2Ply => {
+            ply::encode_with_confidence(&rec.cloud2, Some(&point_confidence(rec)), ply_encoding)
+        }
         ExportFile::Flow => Ok(flo::encode(&resize_flow(&rec.flow, input_w, input_h))),
         ExportFile::Labels => png16::encode_labels(&rec.superpixels.labels),
         ExportFile::Report => report_json(rec),
     }
+}
+
+/// The scale confidence (report `confidence`, in [0, 1]) of each point of the clouds: that of
+/// the point's superpixel (NaN for a label the report does not cover).
+fn point_confidence(rec: &Reconstruction) -> Vec<f32> {
+    cloud_labels(&rec.superpixels.labels, &rec.depth)
+        .iter()
+        .map(|&label| {
+            rec.report
+                .confidence
+                .get(label as usize)
+                .map_or(f32::NAN, |&c| c as f32)
+        })
+        .collect()
 }
 
 /// The report as pretty-printed JSON.

@@ -71,6 +71,30 @@ fn every_file_decodes_at_its_resolution_with_the_reconstruction_values() {
     assert_eq!(cloud2.positions.len(), rec.cloud1.positions.len());
     let ascii = encode(&rec, ExportFile::Frame1Ply, Encoding::Ascii).unwrap();
     assert!(ascii.starts_with(b"ply\nformat ascii 1.0\n"));
+    // Each vertex carries its superpixel's scale confidence (report `confidence`), in both
+    // encodings and both frames: read back, pixel by pixel of frame 1 with a point.
+    let expected: Vec<f32> = rec
+        .superpixels
+        .labels
+        .data()
+        .iter()
+        .zip(rec.depth.data())
+        .filter(|(_, z)| z.is_finite() && **z > 0.0)
+        .map(|(&label, _)| rec.report.confidence[label as usize] as f32)
+        .collect();
+    assert_eq!(expected.len(), rec.cloud1.positions.len());
+    for bytes in [
+        file(ExportFile::Frame1Ply),
+        file(ExportFile::Frame2Ply),
+        ascii,
+    ] {
+        let confidence = ply::decode_confidence(&bytes).unwrap().unwrap();
+        assert_eq!(confidence.len(), expected.len());
+        for (a, b) in confidence.iter().zip(&expected) {
+            assert!((a - b).abs() <= 1e-6, "{a} vs {b}");
+        }
+    }
+    assert!(expected.iter().all(|c| (0.0..=1.0).contains(c)));
 
     let flow = flo::decode(&file(ExportFile::Flow)).unwrap();
     assert_eq!(flow.size(), (240, 102));

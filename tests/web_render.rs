@@ -9,7 +9,7 @@
 //! across backends.
 #![cfg(all(target_arch = "wasm32", feature = "viewer"))]
 
-use js_sys::{Reflect, Uint8Array};
+use js_sys::{Float32Array, Reflect, Uint8Array, Uint32Array};
 use superpixel_soup::image::{Frame, decode_image};
 use superpixel_soup::render::colour::label_colour;
 use superpixel_soup::render::view::DEFAULT_BACKGROUND;
@@ -83,11 +83,18 @@ impl Cloud {
     }
 
     fn show(&self, viewer: &Viewer) {
+        let absent = JsValue::UNDEFINED;
         ok(viewer.set_cloud(
-            self.pos1.clone(),
-            self.pos2.clone(),
-            self.rgb.clone(),
-            self.labels.clone(),
+            &Float32Array::from(&self.pos1[..]).into(),
+            &self
+                .pos2
+                .as_ref()
+                .map_or(absent.clone(), |p| Float32Array::from(&p[..]).into()),
+            &Uint8Array::from(&self.rgb[..]).into(),
+            &self
+                .labels
+                .as_ref()
+                .map_or(absent, |l| Uint32Array::from(&l[..]).into()),
         ));
     }
 }
@@ -419,9 +426,39 @@ async fn bad_options_and_buffers_give_readable_errors() {
 
     let viewer = open("webgl2").await;
     let err = viewer
-        .set_cloud(vec![0.0, 0.0, 1.0], None, vec![1, 2], None)
+        .set_cloud(
+            &Float32Array::from(&[0.0, 0.0, 1.0][..]).into(),
+            &JsValue::NULL,
+            &Uint8Array::from(&[1, 2][..]).into(),
+            &JsValue::UNDEFINED,
+        )
         .unwrap_err();
     assert!(message(err).contains("colours hold 2 bytes for 1 points"));
+    let err = viewer
+        .set_cloud(
+            &"0 0 1".into(),
+            &JsValue::NULL,
+            &Uint8Array::from(&[1, 2, 3][..]).into(),
+            &JsValue::UNDEFINED,
+        )
+        .unwrap_err();
+    assert!(message(err).contains("frame-1 positions must be a Float32Array"));
+    // Plain arrays of numbers are converted.
+    let plain = |values: &[f64]| {
+        JsValue::from(
+            values
+                .iter()
+                .map(|&v| JsValue::from(v))
+                .collect::<js_sys::Array>(),
+        )
+    };
+    ok(viewer.set_cloud(
+        &plain(&[0.0, 0.0, 1.0]),
+        &JsValue::NULL,
+        &plain(&[1.0, 2.0, 3.0]),
+        &JsValue::NULL,
+    ));
+    assert_eq!(viewer.point_count(), 1);
     let err = viewer.set_colour_mode("superpixel").unwrap_err();
     assert!(message(err).contains("labels"));
 }

@@ -24,7 +24,7 @@ import {
 } from './page/input.js';
 import { cancel, run, startPipeline } from './page/worker-client.js';
 import { download } from './page/downloads.js';
-import { loadViewer, switchSoup } from './page/view3d.js';
+import { loadViewer, showUnknownScale, switchSoup } from './page/view3d.js';
 import { rescorePng, takeTruth } from './page/groundtruth.js';
 
 startPipeline(restoreLast);
@@ -62,6 +62,7 @@ function wire() {
   }
   $('intrinsics-reset').addEventListener('click', refreshIntrinsics);
   $('soup-mode').addEventListener('change', switchSoup);
+  $('unknown-scale').addEventListener('change', showUnknownScale);
   for (const button of $('downloads').querySelectorAll('button[data-file]')) {
     button.addEventListener('click', () => download(button.dataset.file));
   }

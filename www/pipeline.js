@@ -1,6 +1,15 @@
 // The main thread's side of the worker (www/worker.js): starts it, sends requests and matches
 // the replies, forwards progress, and cancels a run by terminating the worker and starting a
 // fresh one (a wasm computation cannot be interrupted from outside).
+//
+// Memory: a wasm instance's memory never shrinks, so a worker that has run a reconstruction
+// keeps its peak (81 MiB at 1024 × 768) for as long as it lives, in the same renderer process
+// as the page and its 3D view. `release` hands that memory back once the page has a run's
+// result: it replaces the worker by a fresh one and computes the same reconstruction again
+// there (the pipeline is deterministic) in the background, after the page has shown the result,
+// or as soon as a request needs it (a cloud, a download, a ground-truth score), which then waits
+// for it. The tab's peak is then the larger of the run and the display of its result, not
+// their sum.
 
 /** A request that ended because the worker was terminated (cancel) or replaced (crash). */
 export class CancelledError extends Error {
@@ -9,6 +18,9 @@ export class CancelledError extends Error {
     this.name = 'CancelledError';
   }
 }
+
+/** Requests that need the last reconstruction (kept in the worker). */
+const NEEDS_RESULT = new Set(['cloud', 'export', 'score-depth', 'score-flow']);
 
 export class Pipeline {
   /**
@@ -25,6 +37,10 @@ export class Pipeline {
     this.pending = new Map();
     this.nextId = 1;
     this.ready = null;
+    /** After `release`: gives the released run's inputs again; null while the worker has them. */
+    this.inputs = null;
+    /** The run computing the released result again, while it runs. */
+    this.recomputing = null;
     this.start();
   }
 
@@ -84,8 +100,22 @@ export class Pipeline {
     }
   }
 
-  /** Sends a request once the worker is ready; resolves with the reply message. */
+  /**
+   * Sends a request once the worker is ready; resolves with the reply message. A request for
+   * the last result (NEEDS_RESULT) after `release` waits until it is computed again; a new run
+   * ends that computation.
+   */
   async request(type, payload = {}, transfer = []) {
+    if (type === 'run' && (this.inputs !== null || this.recomputing !== null)) {
+      this.restart(); // the released result is superseded
+    } else if (NEEDS_RESULT.has(type) && this.inputs !== null) {
+      await this.recompute();
+    }
+    return this.send(type, payload, transfer);
+  }
+
+  /** Sends a request once the worker is ready; resolves with the reply message. */
+  async send(type, payload, transfer) {
     await this.ready;
     const id = this.nextId++;
     return new Promise((resolve, reject) => {
@@ -100,10 +130,55 @@ export class Pipeline {
    */
   restart(reason = new CancelledError()) {
     this.worker.terminate();
+    this.inputs = null;
+    this.recomputing = null;
     for (const { reject } of this.pending.values()) {
       reject(reason);
     }
     this.pending.clear();
     this.start();
+  }
+
+  /**
+   * Frees the memory of the worker that just handed over a run's result (module comment):
+   * replaces it by a fresh worker. `inputs()` resolves to `{ frames, options }` of that run
+   * again (new ImageBitmaps, transferred), for `recompute`.
+   */
+  release(inputs) {
+    this.restart();
+    this.inputs = inputs;
+  }
+
+  /**
+   * Computes the released result again in the worker (once, however often it is asked);
+   * resolves when the worker has it. Rejects with a CancelledError when a new run, a cancel or
+   * a restart ends it.
+   */
+  recompute() {
+    if (this.inputs === null) {
+      return this.recomputing ?? Promise.resolve();
+    }
+    if (this.recomputing === null) {
+      const inputs = this.inputs;
+      const worker = this.worker;
+      const recomputing = (async () => {
+        const { frames, options } = await inputs();
+        if (this.worker !== worker) {
+          frames.forEach((frame) => frame.close());
+          throw new CancelledError();
+        }
+        await this.send('run', { frames, options, quiet: true }, frames);
+        if (this.worker === worker) {
+          this.inputs = null;
+        }
+      })().finally(() => {
+        if (this.recomputing === recomputing) {
+          this.recomputing = null;
+        }
+      });
+      recomputing.catch(() => {}); // reported to the requests that wait for it
+      this.recomputing = recomputing;
+    }
+    return this.recomputing;
   }
 }

@@ -7,8 +7,10 @@
 // Requests (each with an `id`; answered by { type: 'reply', id, ... } or { type: 'error', id, ... }):
 //   { type: 'exif', bytes: ArrayBuffer }                   → { exif: { focal35mm, warning } }
 //   { type: 'intrinsics', width, height, focal35mm }        → { camera: { intrinsics, source } }
-//   { type: 'run', frames: [ImageBitmap, ImageBitmap], options }
-//       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below)
+//   { type: 'run', frames: [ImageBitmap, ImageBitmap], options, quiet }
+//       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below);
+//       `quiet: true` (the page computing a result it already has again, www/pipeline.js):
+//       no progress and no result in the reply, the reconstruction is only kept
 //   { type: 'cloud', soup: 'organised' | 'scaled' | 'unorganised' } → { cloud }
 //   { type: 'export', name }                                → { bytes: ArrayBuffer, mediaType }
 //   { type: 'score-depth', name, bytes, pngScale }          → { score, picture: RGBA at the
@@ -63,14 +65,14 @@ function takeCloud(buffers) {
 
 const cloudTransfer = (c) => [c.positions1.buffer, c.positions2.buffer, c.colours.buffer, c.labels.buffer];
 
-function run(id, { frames, options }) {
+function run(id, { frames, options, quiet = false }) {
   const clock = performance.now();
   current?.free();
   current = null;
   const [one, two] = frames.map(readFrame);
   const pixelsMs = performance.now() - clock;
   let last = { stage: '', fraction: -1 };
-  const progress = (stage, fraction) => {
+  const progress = quiet ? undefined : (stage, fraction) => {
     // At most ~50 messages per stage.
     if (stage !== last.stage || fraction - last.fraction >= 0.02 || fraction === 1) {
       last = { stage, fraction };
@@ -80,6 +82,9 @@ function run(id, { frames, options }) {
   const start = performance.now();
   current = soup.reconstruct(one, two, JSON.stringify(options), progress);
   const reconstructMs = performance.now() - start;
+  if (quiet) {
+    return [{ result: null }];
+  }
   const collect = performance.now();
   const cloud = takeCloud(current.cloud('organised'));
   const pictures = {};

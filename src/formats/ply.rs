@@ -1,4 +1,5 @@
-//! PLY point clouds with per-vertex colour: `x y z` (float) and `red green blue` (uchar).
+//! PLY point clouds with per-vertex colour: `x y z` (float) and `red green blue` (uchar), and
+//! optionally `confidence` (float: the scale confidence of the point's superpixel, in [0, 1]).
 //! Written as binary little-endian by default, ASCII on request; read back from either, and from
 //! other tools' files whose vertex element has those properties among others.
 
@@ -14,6 +15,26 @@ pub enum Encoding {
 
 /// Encodes a cloud. Points with a non-finite coordinate are skipped (PLY has no "unknown").
 pub fn encode(cloud: &PointCloud, encoding: Encoding) -> Result<Vec<u8>> {
+    encode_with_confidence(cloud, None, encoding)
+}
+
+/// Encodes a cloud with a `confidence` float property per vertex (`confidence[i]` for point
+/// `i`), when given. Points with a non-finite coordinate are skipped. Fails when the lengths
+/// disagree.
+pub fn encode_with_confidence(
+    cloud: &PointCloud,
+    confidence: Option<&[f32]>,
+    encoding: Encoding,
+) -> Result<Vec<u8>> {
+    if let Some(confidence) = confidence
+        && confidence.len() != cloud.positions.len()
+    {
+        return Err(Error::InvalidParameter(format!(
+            "point cloud has {} positions but {} confidences",
+            cloud.positions.len(),
+            confidence.len()
+        )));
+    }
     if cloud.positions.len() != cloud.colours.len() {
         return Err(Error::InvalidParameter(format!(
             "point cloud has {} positions but {} colours",
@@ -21,12 +42,13 @@ pub fn encode(cloud: &PointCloud, encoding: Encoding) -> Result<Vec<u8>> {
             cloud.colours.len()
         )));
     }
-    let points: Vec<([f32; 3], [u8; 3])> = cloud
+    let points: Vec<([f32; 3], [u8; 3], Option<f32>)> = cloud
         .positions
         .iter()
         .zip(&cloud.colours)
-        .filter(|(p, _)| p.iter().all(|c| c.is_finite()))
-        .map(|(p, c)| (*p, *c))
+        .enumerate()
+        .filter(|(_, (p, _))| p.iter().all(|c| c.is_finite()))
+        .map(|(i, (p, c))| (*p, *c, confidence.map(|k| k[i])))
         .collect();
     let format = match encoding {
         Encoding::BinaryLittleEndian => "binary_little_endian",
@@ -35,21 +57,35 @@ pub fn encode(cloud: &PointCloud, encoding: Encoding) -> Result<Vec<u8>> {
     let mut out = format!(
         "ply\nformat {format} 1.0\ncomment written by superpixel-soup\nelement vertex {}\n\
          property float x\nproperty float y\nproperty float z\n\
-         property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n",
-        points.len()
+         property uchar red\nproperty uchar green\nproperty uchar blue\n{}end_header\n",
+        points.len(),
+        if confidence.is_some() {
+            "property float confidence\n"
+        } else {
+            ""
+        }
     )
     .into_bytes();
-    for (p, c) in points {
+    for (p, c, k) in points {
         match encoding {
             Encoding::BinaryLittleEndian => {
                 for v in p {
                     out.extend_from_slice(&v.to_le_bytes());
                 }
                 out.extend_from_slice(&c);
+                if let Some(k) = k {
+                    out.extend_from_slice(&k.to_le_bytes());
+                }
             }
-            Encoding::Ascii => out.extend_from_slice(
-                format!("{} {} {} {} {} {}\n", p[0], p[1], p[2], c[0], c[1], c[2]).as_bytes(),
-            ),
+            Encoding::Ascii => {
+                out.extend_from_slice(
+                    format!("{} {} {} {} {} {}", p[0], p[1], p[2], c[0], c[1], c[2]).as_bytes(),
+                );
+                if let Some(k) = k {
+                    out.extend_from_slice(format!(" {k}").as_bytes());
+                }
+                out.push(b'\n');
+            }
         }
     }
     Ok(out)
@@ -118,17 +154,12 @@ struct Header {
 /// Decodes a PLY file whose first element is `vertex` with scalar properties including
 /// x, y, z (and optionally red, green, blue; grey 128 when absent).
 pub fn decode(bytes: &[u8]) -> Result<PointCloud> {
-    let header = parse_header(bytes)?;
+    let (header, rows) = decode_rows(bytes)?;
     let find = |name: &str| header.properties.iter().position(|(n, _)| n == name);
     let (Some(ix), Some(iy), Some(iz)) = (find("x"), find("y"), find("z")) else {
         return Err(Error::format("PLY", "vertex element lacks x, y or z"));
     };
     let rgb = [find("red"), find("green"), find("blue")];
-    let body = &bytes[header.body_start..];
-    let rows = match header.encoding {
-        Encoding::Ascii => ascii_rows(body, header.vertices, header.properties.len())?,
-        Encoding::BinaryLittleEndian => binary_rows(body, &header)?,
-    };
     let mut cloud = PointCloud::default();
     for row in rows {
         cloud
@@ -140,6 +171,31 @@ pub fn decode(bytes: &[u8]) -> Result<PointCloud> {
             .push([channel(rgb[0]), channel(rgb[1]), channel(rgb[2])]);
     }
     Ok(cloud)
+}
+
+/// The per-vertex `confidence` property of a PLY file, in vertex order, or `None` when the
+/// vertex element has none.
+pub fn decode_confidence(bytes: &[u8]) -> Result<Option<Vec<f32>>> {
+    let (header, rows) = decode_rows(bytes)?;
+    let Some(i) = header
+        .properties
+        .iter()
+        .position(|(n, _)| n == "confidence")
+    else {
+        return Ok(None);
+    };
+    Ok(Some(rows.iter().map(|row| row[i] as f32).collect()))
+}
+
+/// The header and the vertex rows (every scalar property, as f64) of a PLY file.
+fn decode_rows(bytes: &[u8]) -> Result<(Header, Vec<Vec<f64>>)> {
+    let header = parse_header(bytes)?;
+    let body = &bytes[header.body_start..];
+    let rows = match header.encoding {
+        Encoding::Ascii => ascii_rows(body, header.vertices, header.properties.len())?,
+        Encoding::BinaryLittleEndian => binary_rows(body, &header)?,
+    };
+    Ok((header, rows))
 }
 
 fn parse_header(bytes: &[u8]) -> Result<Header> {
@@ -263,6 +319,19 @@ mod tests {
             positions: vec![[0.0, -1.5, 2.25], [1e-3, 4.0, 8.0], [f32::NAN, 0.0, 1.0]],
             colours: vec![[255, 0, 7], [1, 2, 3], [9, 9, 9]],
         }
+    }
+
+    #[test]
+    fn confidence_round_trips_and_follows_the_kept_points() {
+        for encoding in [Encoding::BinaryLittleEndian, Encoding::Ascii] {
+            let bytes =
+                encode_with_confidence(&cloud(), Some(&[0.25, 1.0, 0.5]), encoding).unwrap();
+            assert_eq!(decode(&bytes).unwrap().positions, cloud().positions[..2]);
+            assert_eq!(decode_confidence(&bytes).unwrap(), Some(vec![0.25, 1.0]));
+            let plain = encode(&cloud(), encoding).unwrap();
+            assert_eq!(decode_confidence(&plain).unwrap(), None);
+        }
+        assert!(encode_with_confidence(&cloud(), Some(&[0.5]), Encoding::Ascii).is_err());
     }
 
     #[test]

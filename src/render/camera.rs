@@ -60,10 +60,15 @@ impl Bounds {
     /// the origin when there are none. The radius is never zero (a single point gets a small
     /// sphere) so clip planes and zoom limits stay well defined.
     pub fn of_points<'a>(points: impl IntoIterator<Item = &'a [f32; 3]>) -> Bounds {
+        Bounds::of_values(points.into_iter().copied())
+    }
+
+    /// [`Bounds::of_points`] of points given by value.
+    pub fn of_values(points: impl IntoIterator<Item = [f32; 3]>) -> Bounds {
         let mut lo = Vec3::splat(f32::INFINITY);
         let mut hi = Vec3::splat(f32::NEG_INFINITY);
         for p in points {
-            let p = Vec3::from_array(*p);
+            let p = Vec3::from_array(p);
             if p.is_finite() {
                 lo = lo.min(p);
                 hi = hi.max(p);
@@ -198,7 +203,17 @@ impl Camera {
     /// [`FRAMING_OUTLIER_FACTOR`] × the median distance from the median are ignored).
     /// `fov_y` is in radians, `aspect` is width over height.
     pub fn home(points: &[[f32; 3]], fov_y: f32, aspect: f32) -> Camera {
-        let inliers = framing_points(points);
+        Camera::home_of(|| points.iter().copied(), fov_y, aspect)
+    }
+
+    /// [`Camera::home`] of the points that `points()` yields (called once per pass over them,
+    /// the same points in the same order each time), so that a large cloud is framed without
+    /// copying it: the only scratch is one `f32` per point.
+    pub fn home_of<I: Iterator<Item = [f32; 3]>>(
+        points: impl Fn() -> I,
+        fov_y: f32,
+        aspect: f32,
+    ) -> Camera {
         let mut camera = Camera {
             target: Vec3::ZERO,
             distance: 1.0,
@@ -206,20 +221,34 @@ impl Camera {
             pitch: 0.0,
             fov_y,
         };
-        if inliers.is_empty() {
+        // The finite points within FRAMING_OUTLIER_FACTOR × the median distance of the
+        // per-axis median point.
+        let finite = || points().map(Vec3::from_array).filter(|p| p.is_finite());
+        let mut scratch: Vec<f32> = Vec::new();
+        let mut median_of = |values: &mut dyn Iterator<Item = f32>| {
+            scratch.clear();
+            scratch.extend(values);
+            (!scratch.is_empty()).then(|| median(&mut scratch))
+        };
+        let Some(x) = median_of(&mut finite().map(|p| p.x)) else {
             return camera;
-        }
-        let mut depths: Vec<f32> = inliers.iter().map(|p| p.z).collect();
-        let z_centre = median(&mut depths);
+        };
+        let y = median_of(&mut finite().map(|p| p.y)).unwrap_or(0.0);
+        let z = median_of(&mut finite().map(|p| p.z)).unwrap_or(0.0);
+        let centre = Vec3::new(x, y, z);
+        let limit = FRAMING_OUTLIER_FACTOR
+            * median_of(&mut finite().map(|p| p.distance(centre))).unwrap_or(0.0);
+        let inliers = || finite().filter(move |p| limit <= 0.0 || p.distance(centre) <= limit);
+        let Some(z_centre) = median_of(&mut inliers().map(|p| p.z)) else {
+            return camera;
+        };
         let tan_v = (fov_y * 0.5).tan() * FRAMING_FILL;
         let tan_h = tan_v * aspect.max(1e-6);
         // The eye sits at (0, 0, z_centre − d); a point's view depth is then p.z − z_centre + d,
         // and it is in view when |x| ≤ tan_h · depth and |y| ≤ tan_v · depth.
-        let inlier_array: Vec<[f32; 3]> = inliers.iter().map(|p| p.to_array()).collect();
-        let bounds = Bounds::of_points(&inlier_array);
+        let bounds = Bounds::of_values(inliers().map(|p| p.to_array()));
         let min_depth = bounds.radius * 1e-3;
-        let needed = inliers
-            .iter()
+        let needed = inliers()
             .map(|p| {
                 let lateral = (p.x.abs() / tan_h).max(p.y.abs() / tan_v).max(min_depth);
                 lateral + z_centre - p.z
@@ -229,30 +258,6 @@ impl Camera {
         camera.distance = needed.max(z_centre).max(bounds.radius * 1e-3);
         camera
     }
-}
-
-/// The finite points within [`FRAMING_OUTLIER_FACTOR`] × the median distance of the
-/// per-axis median point.
-fn framing_points(points: &[[f32; 3]]) -> Vec<Vec3> {
-    let finite: Vec<Vec3> = points
-        .iter()
-        .map(|p| Vec3::from_array(*p))
-        .filter(|p| p.is_finite())
-        .collect();
-    if finite.is_empty() {
-        return finite;
-    }
-    let axis = |f: fn(&Vec3) -> f32| median(&mut finite.iter().map(f).collect::<Vec<_>>());
-    let centre = Vec3::new(axis(|p| p.x), axis(|p| p.y), axis(|p| p.z));
-    let mut distances: Vec<f32> = finite.iter().map(|p| p.distance(centre)).collect();
-    let limit = FRAMING_OUTLIER_FACTOR * median(&mut distances);
-    if limit <= 0.0 {
-        return finite;
-    }
-    finite
-        .into_iter()
-        .filter(|p| p.distance(centre) <= limit)
-        .collect()
 }
 
 /// The median of a non-empty slice of finite values (upper median for even lengths);

@@ -24,54 +24,101 @@ impl PointCloud {
         rgb: &[u8],
         labels: Option<&[u32]>,
     ) -> Result<PointCloud> {
+        let n = PointCloud::check_lengths(
+            pos1.len(),
+            pos2.map(<[f32]>::len),
+            rgb.len(),
+            labels.map(<[u32]>::len),
+        )?;
+        let mut cloud = PointCloud::with_capacity(n, labels.is_some());
+        cloud.extend(pos1, pos2, rgb, labels)?;
+        Ok(cloud)
+    }
+
+    /// The number of points of flat buffers of these lengths (numbers in `pos1` and `pos2`,
+    /// bytes in `rgb`, labels), as [`PointCloud::new`] takes them; fails, saying which buffer
+    /// is wrong, when the lengths do not agree.
+    pub fn check_lengths(
+        pos1: usize,
+        pos2: Option<usize>,
+        rgb: usize,
+        labels: Option<usize>,
+    ) -> Result<usize> {
         let bad = |reason: String| RenderError::InvalidParameter(format!("point cloud: {reason}"));
-        if !pos1.len().is_multiple_of(3) {
+        if !pos1.is_multiple_of(3) {
             return Err(bad(format!(
-                "frame-1 positions hold {} numbers, not a multiple of 3 (x, y, z per point)",
-                pos1.len()
+                "frame-1 positions hold {pos1} numbers, not a multiple of 3 (x, y, z per point)"
             )));
         }
-        let n = pos1.len() / 3;
-        let pos2 = pos2.unwrap_or(pos1);
-        if pos2.len() != pos1.len() {
+        let n = pos1 / 3;
+        if let Some(pos2) = pos2
+            && pos2 != pos1
+        {
             return Err(bad(format!(
-                "frame-2 positions hold {} numbers for {n} points (3 per point expected)",
-                pos2.len()
+                "frame-2 positions hold {pos2} numbers for {n} points (3 per point expected)"
             )));
         }
-        if rgb.len() != 3 * n {
+        if rgb != 3 * n {
             return Err(bad(format!(
-                "colours hold {} bytes for {n} points (3 per point expected)",
-                rgb.len()
+                "colours hold {rgb} bytes for {n} points (3 per point expected)"
             )));
         }
         if let Some(labels) = labels
-            && labels.len() != n
+            && labels != n
         {
             return Err(bad(format!(
-                "{} labels for {n} points (1 per point expected)",
-                labels.len()
+                "{labels} labels for {n} points (1 per point expected)"
             )));
         }
-        let mut cloud = PointCloud {
+        Ok(n)
+    }
+
+    /// An empty cloud with room for `n` points, with labels or without.
+    pub fn with_capacity(n: usize, labels: bool) -> PointCloud {
+        PointCloud {
             pos1: Vec::with_capacity(n),
             pos2: Vec::with_capacity(n),
             rgb: Vec::with_capacity(n),
-            labels: labels.map(|_| Vec::with_capacity(n)),
-        };
+            labels: labels.then(|| Vec::with_capacity(n)),
+        }
+    }
+
+    /// Appends the points of flat buffers laid out as for [`PointCloud::new`] (a slice of a
+    /// larger cloud, say), leaving out points that are not finite in either frame. Fails when
+    /// the lengths do not agree, or when labels are given to a cloud without them or missing
+    /// for a cloud with them.
+    pub fn extend(
+        &mut self,
+        pos1: &[f32],
+        pos2: Option<&[f32]>,
+        rgb: &[u8],
+        labels: Option<&[u32]>,
+    ) -> Result<()> {
+        let n = PointCloud::check_lengths(
+            pos1.len(),
+            pos2.map(<[f32]>::len),
+            rgb.len(),
+            labels.map(<[u32]>::len),
+        )?;
+        if labels.is_some() != self.labels.is_some() {
+            return Err(RenderError::InvalidParameter(
+                "point cloud: labels must be given for every point or for none".into(),
+            ));
+        }
+        let pos2 = pos2.unwrap_or(pos1);
         for i in 0..n {
             let p1 = [pos1[3 * i], pos1[3 * i + 1], pos1[3 * i + 2]];
             let p2 = [pos2[3 * i], pos2[3 * i + 1], pos2[3 * i + 2]];
             if p1.iter().chain(&p2).all(|v| v.is_finite()) {
-                cloud.pos1.push(p1);
-                cloud.pos2.push(p2);
-                cloud.rgb.push([rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]]);
-                if let (Some(kept), Some(labels)) = (cloud.labels.as_mut(), labels) {
+                self.pos1.push(p1);
+                self.pos2.push(p2);
+                self.rgb.push([rgb[3 * i], rgb[3 * i + 1], rgb[3 * i + 2]]);
+                if let (Some(kept), Some(labels)) = (self.labels.as_mut(), labels) {
                     kept.push(labels[i]);
                 }
             }
         }
-        Ok(cloud)
+        Ok(())
     }
 
     /// Number of points kept.
@@ -145,5 +192,31 @@ mod tests {
         assert!(m.contains("colours hold 4 bytes for 1 points"), "{m}");
         let m = message(PointCloud::new(&[1.0, 2.0, 3.0], None, &[0; 3], Some(&[])));
         assert!(m.contains("0 labels for 1 points"), "{m}");
+    }
+
+    #[test]
+    fn a_cloud_built_in_slices_equals_one_built_at_once() {
+        let pos1: Vec<f32> = (0..30)
+            .map(|i| if i == 7 { f32::NAN } else { i as f32 })
+            .collect();
+        let pos2: Vec<f32> = pos1.iter().map(|v| v + 0.5).collect();
+        let rgb: Vec<u8> = (0..30).collect();
+        let labels: Vec<u32> = (0..10).collect();
+        let whole = PointCloud::new(&pos1, Some(&pos2), &rgb, Some(&labels)).unwrap();
+        assert_eq!(whole.len(), 9);
+        let mut sliced = PointCloud::with_capacity(10, true);
+        for k in (0..10).step_by(4) {
+            let end = (k + 4).min(10);
+            sliced
+                .extend(
+                    &pos1[3 * k..3 * end],
+                    Some(&pos2[3 * k..3 * end]),
+                    &rgb[3 * k..3 * end],
+                    Some(&labels[k..end]),
+                )
+                .unwrap();
+        }
+        assert_eq!(sliced, whole);
+        assert!(sliced.extend(&[0.0; 3], None, &[0; 3], None).is_err());
     }
 }

@@ -93,42 +93,68 @@ fn hsv_to_rgb(hue: f32, saturation: f32, value: f32) -> [u8; 3] {
     [byte(r), byte(g), byte(b)]
 }
 
+/// How the points of one cloud are coloured in one mode: each point's frame-1 and frame-2
+/// colours as RGBA bytes ([`Colouring::pair`]).
+pub struct Colouring<'a> {
+    cloud: &'a PointCloud,
+    mode: ColourMode,
+    depth_range: (f32, f32),
+}
+
+impl<'a> Colouring<'a> {
+    /// The inverse-depth range of the depth colours of `cloud`: that of its frame-1 depths
+    /// ([`inverse_depth_range`]), so decimation does not change the colours.
+    pub fn depth_range(cloud: &PointCloud) -> (f32, f32) {
+        inverse_depth_range(cloud.pos1().iter().map(|p| p[2])).unwrap_or((0.0, 1.0))
+    }
+
+    /// Colours `cloud` in `mode`, depth colours spanning `depth_range` (from
+    /// [`Colouring::depth_range`]). Fails for [`ColourMode::Superpixel`] when the cloud has no
+    /// labels.
+    pub fn new(
+        cloud: &'a PointCloud,
+        mode: ColourMode,
+        depth_range: (f32, f32),
+    ) -> Result<Colouring<'a>> {
+        if mode == ColourMode::Superpixel && cloud.labels().is_none() {
+            return Err(RenderError::InvalidParameter(
+                "superpixel colours need per-point labels, and this cloud has none".into(),
+            ));
+        }
+        Ok(Colouring {
+            cloud,
+            mode,
+            depth_range,
+        })
+    }
+
+    /// The frame-1 and frame-2 colours of point `i` of the cloud (RGBA, alpha 255).
+    pub fn pair(&self, i: usize) -> [[u8; 4]; 2] {
+        let rgba = |[r, g, b]: [u8; 3]| [r, g, b, 255];
+        match self.mode {
+            ColourMode::Rgb => [rgba(self.cloud.rgb()[i]); 2],
+            ColourMode::Depth => [
+                rgba(depth_colour(self.cloud.pos1()[i][2], self.depth_range)),
+                rgba(depth_colour(self.cloud.pos2()[i][2], self.depth_range)),
+            ],
+            ColourMode::Superpixel => {
+                let label = self.cloud.labels().map_or(0, |labels| labels[i]);
+                [rgba(label_colour(label)); 2]
+            }
+        }
+    }
+}
+
 /// The colours of the points `shown` (indices into `cloud`) under `mode`: for each point its
 /// frame-1 colour then its frame-2 colour, as RGBA bytes (8 bytes per point). The depth range is
 /// taken from the frame-1 depths of the whole cloud, so decimation does not change the colours.
 /// Fails for [`ColourMode::Superpixel`] when the cloud has no labels.
 pub fn point_colours(cloud: &PointCloud, shown: &[u32], mode: ColourMode) -> Result<Vec<[u8; 4]>> {
-    let rgba = |[r, g, b]: [u8; 3]| [r, g, b, 255];
-    let mut out = Vec::with_capacity(shown.len() * 2);
-    match mode {
-        ColourMode::Rgb => {
-            for &i in shown {
-                let c = rgba(cloud.rgb()[i as usize]);
-                out.extend([c, c]);
-            }
-        }
-        ColourMode::Depth => {
-            let range =
-                inverse_depth_range(cloud.pos1().iter().map(|p| p[2])).unwrap_or((0.0, 1.0));
-            for &i in shown {
-                let i = i as usize;
-                out.push(rgba(depth_colour(cloud.pos1()[i][2], range)));
-                out.push(rgba(depth_colour(cloud.pos2()[i][2], range)));
-            }
-        }
-        ColourMode::Superpixel => {
-            let labels = cloud.labels().ok_or_else(|| {
-                RenderError::InvalidParameter(
-                    "superpixel colours need per-point labels, and this cloud has none".into(),
-                )
-            })?;
-            for &i in shown {
-                let c = rgba(label_colour(labels[i as usize]));
-                out.extend([c, c]);
-            }
-        }
-    }
-    Ok(out)
+    let colouring = Colouring::new(cloud, mode, Colouring::depth_range(cloud))?;
+    Ok(shown
+        .iter()
+        .flat_map(|&i| colouring.pair(i as usize))
+        .collect())
 }
 
 #[cfg(test)]

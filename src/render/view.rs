@@ -1,13 +1,16 @@
 //! Everything the viewer shows and how, independent of the GPU: the cloud and the subset of it
 //! that is drawn, the point colours, the camera and its gestures, and the display settings.
-//! The GPU part (`gpu`, wasm only) uploads what this produces: the packed point
-//! buffers when their version changes, and the [`Uniforms`] every frame.
+//! The GPU part (`gpu`, wasm only) uploads what this produces: the packed points, a slice at a
+//! time ([`View::pack_positions`], [`View::pack_colours`]) when their version changes, and the
+//! [`Uniforms`] every frame. The view keeps no packed copy of the cloud: a 1024 × 768
+//! reconstruction is 786 432 points, 24 MB as a [`PointCloud`], and its packed form would be
+//! another 31 MB.
 
 use super::{RenderError, Result};
 
 use super::camera::{Bounds, Camera, DEFAULT_FOV_Y, Viewport};
 use super::cloud::PointCloud;
-use super::colour::{ColourMode, point_colours};
+use super::colour::{ColourMode, Colouring};
 use super::controls::{Controls, Drag};
 use super::decimate::{DESKTOP_POINT_BUDGET, decimate};
 
@@ -19,6 +22,40 @@ pub const MAX_POINT_SIZE: f32 = 64.0;
 
 /// Default background: the page's dark header colour.
 pub const DEFAULT_BACKGROUND: [u8; 3] = [0x1d, 0x23, 0x30];
+
+/// How the points of flagged superpixels (e.g. those whose scale is unknown) are shown.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum FlagStyle {
+    /// Like every other point.
+    #[default]
+    Show,
+    /// In [`FLAG_COLOUR`], whatever the colour mode.
+    Mark,
+    /// Not drawn.
+    Hide,
+}
+
+impl std::str::FromStr for FlagStyle {
+    type Err = RenderError;
+
+    fn from_str(s: &str) -> Result<Self> {
+        match s {
+            "show" => Ok(FlagStyle::Show),
+            "mark" => Ok(FlagStyle::Mark),
+            "hide" => Ok(FlagStyle::Hide),
+            other => Err(RenderError::InvalidParameter(format!(
+                "flagged points are \"show\", \"mark\" or \"hide\", not {other:?}"
+            ))),
+        }
+    }
+}
+
+/// Flagged superpixel labels must be below this (a reconstruction has thousands).
+pub const MAX_FLAGGED_LABEL: u32 = 1 << 24;
+
+/// The colour of marked points: magenta, the tint of the page's confidence picture
+/// (`output::confidence_picture`).
+pub const FLAG_COLOUR: [u8; 4] = [255, 0, 200, 255];
 
 /// The per-frame shader parameters, laid out as the WGSL `Uniforms` struct of `points.wgsl`
 /// (80 bytes).
@@ -58,13 +95,15 @@ impl Uniforms {
 #[derive(Clone, Debug)]
 pub struct View {
     cloud: PointCloud,
-    shown: Vec<u32>,
+    /// Indices of the drawn points (ascending), or `None` when every point is drawn.
+    shown: Option<Vec<u32>>,
     budget: usize,
     colour_mode: ColourMode,
-    /// Per shown point: (x, y, z, 1) in frame 1 then (x, y, z, 1) in frame 2.
-    positions: Vec<[f32; 4]>,
-    /// Per shown point: RGBA in frame 1 then RGBA in frame 2.
-    colours: Vec<[u8; 4]>,
+    /// The colour map's inverse-depth range (of the whole cloud's frame-1 depths).
+    depth_range: (f32, f32),
+    /// Per superpixel label: whether its points are flagged (labels past the end are not).
+    flagged: Vec<bool>,
+    flag_style: FlagStyle,
     positions_version: u64,
     colours_version: u64,
     bounds: Bounds,
@@ -95,11 +134,12 @@ impl View {
         };
         let mut view = View {
             cloud: PointCloud::default(),
-            shown: Vec::new(),
+            shown: None,
             budget: budget.max(1),
             colour_mode: ColourMode::Rgb,
-            positions: Vec::new(),
-            colours: Vec::new(),
+            depth_range: (0.0, 1.0),
+            flagged: Vec::new(),
+            flag_style: FlagStyle::Show,
             positions_version: 0,
             colours_version: 0,
             bounds: Bounds::of_points(&[]),
@@ -124,9 +164,48 @@ impl View {
         if self.colour_mode == ColourMode::Superpixel && self.cloud.labels().is_none() {
             self.colour_mode = ColourMode::Rgb;
         }
+        self.depth_range = Colouring::depth_range(&self.cloud);
         self.select_points();
         self.bounds = Bounds::of_points(self.cloud.pos1().iter().chain(self.cloud.pos2()));
         self.reset_view();
+    }
+
+    /// Flags the points of the superpixels `labels` (replacing earlier flags; they stay for
+    /// later clouds) and shows flagged points in `style`. Points of a cloud without labels are
+    /// never flagged. Hiding keeps the camera where it is. Fails, changing nothing, for a label
+    /// of [`MAX_FLAGGED_LABEL`] or more.
+    pub fn set_flagged(&mut self, labels: &[u32], style: FlagStyle) -> Result<()> {
+        if let Some(&label) = labels.iter().find(|&&l| l >= MAX_FLAGGED_LABEL) {
+            return Err(RenderError::InvalidParameter(format!(
+                "superpixel label {label} is too large to flag (at most {})",
+                MAX_FLAGGED_LABEL - 1
+            )));
+        }
+        let len = labels.iter().max().map_or(0, |&l| l as usize + 1);
+        self.flagged = vec![false; len];
+        for &label in labels {
+            self.flagged[label as usize] = true;
+        }
+        self.flag_style = style;
+        self.select_points();
+        Ok(())
+    }
+
+    /// Whether point `i` of the cloud is flagged.
+    fn is_flagged(&self, i: usize) -> bool {
+        self.cloud
+            .labels()
+            .and_then(|labels| self.flagged.get(labels[i] as usize))
+            .copied()
+            .unwrap_or(false)
+    }
+
+    /// Takes the cloud out (the view is left empty), e.g. to free its memory before a new one
+    /// is built.
+    pub fn take_cloud(&mut self) -> PointCloud {
+        let cloud = std::mem::take(&mut self.cloud);
+        self.set_cloud(PointCloud::default());
+        cloud
     }
 
     /// Puts the camera where `camera` says (e.g. the camera of an earlier viewer of the same
@@ -151,7 +230,7 @@ impl View {
     /// Recolours the points. Fails, leaving the mode unchanged, for superpixel colours on a
     /// cloud without labels.
     pub fn set_colour_mode(&mut self, mode: ColourMode) -> Result<()> {
-        self.colours = point_colours(&self.cloud, &self.shown, mode)?;
+        Colouring::new(&self.cloud, mode, self.depth_range)?;
         self.colour_mode = mode;
         self.colours_version += 1;
         Ok(())
@@ -231,11 +310,25 @@ impl View {
 
     /// Back to the home view ([`Camera::home`]) for the current field of view and aspect ratio.
     pub fn reset_view(&mut self) {
-        let mut framed: Vec<[f32; 3]> = Vec::with_capacity(2 * self.shown.len());
-        framed.extend(self.shown.iter().map(|&i| self.cloud.pos1()[i as usize]));
-        framed.extend(self.shown.iter().map(|&i| self.cloud.pos2()[i as usize]));
-        self.home = Camera::home(&framed, self.fov_y, self.viewport.aspect());
+        let (pos1, pos2) = (self.cloud.pos1(), self.cloud.pos2());
+        let framed = || {
+            let shown = || self.shown_range(0, usize::MAX);
+            shown().map(|i| pos1[i]).chain(shown().map(|i| pos2[i]))
+        };
+        self.home = Camera::home_of(framed, self.fov_y, self.viewport.aspect());
         self.camera = self.home;
+    }
+
+    /// Indices into the cloud of the drawn points `first..first + count` (clipped to the drawn
+    /// points), ascending.
+    fn shown_range(&self, first: usize, count: usize) -> impl Iterator<Item = usize> + '_ {
+        let len = self.shown_len();
+        let range = first.min(len)..first.saturating_add(count).min(len);
+        let (all, some): (std::ops::Range<usize>, &[u32]) = match &self.shown {
+            None => (range, &[]),
+            Some(shown) => (0..0, &shown[range]),
+        };
+        all.chain(some.iter().map(|&i| i as usize))
     }
 
     /// A pointer went down at (`x`, `y`) CSS pixels from the canvas's top left; `drag` is what
@@ -276,7 +369,7 @@ impl View {
 
     /// Number of points drawn.
     pub fn shown_len(&self) -> usize {
-        self.shown.len()
+        self.shown.as_ref().map_or(self.cloud.len(), Vec::len)
     }
 
     /// Number of points in the cloud (before decimation).
@@ -284,15 +377,44 @@ impl View {
         self.cloud.len()
     }
 
-    /// Packed positions of the drawn points (two RGBA32F texels each: X then X', w = 1), and
-    /// their version (it changes whenever they do).
-    pub fn positions(&self) -> (&[[f32; 4]], u64) {
-        (&self.positions, self.positions_version)
+    /// The version of the drawn points' positions: it changes whenever they do.
+    pub fn positions_version(&self) -> u64 {
+        self.positions_version
     }
 
-    /// Packed colours of the drawn points (frame-1 RGBA then frame-2 RGBA), and their version.
-    pub fn colours(&self) -> (&[[u8; 4]], u64) {
-        (&self.colours, self.colours_version)
+    /// The version of the drawn points' colours: it changes whenever they do.
+    pub fn colours_version(&self) -> u64 {
+        self.colours_version
+    }
+
+    /// Appends to `out` the packed positions of the drawn points `first..first + count`
+    /// (clipped to the drawn points): two RGBA32F texels each, X then X', w = 1.
+    pub fn pack_positions(&self, first: usize, count: usize, out: &mut Vec<[f32; 4]>) {
+        let homogeneous = |[x, y, z]: [f32; 3]| [x, y, z, 1.0];
+        let (pos1, pos2) = (self.cloud.pos1(), self.cloud.pos2());
+        for i in self.shown_range(first, count) {
+            out.extend([homogeneous(pos1[i]), homogeneous(pos2[i])]);
+        }
+    }
+
+    /// Appends to `out` the packed colours of the drawn points `first..first + count` (clipped
+    /// to the drawn points): frame-1 RGBA then frame-2 RGBA each, in the current colour mode.
+    pub fn pack_colours(&self, first: usize, count: usize, out: &mut Vec<[u8; 4]>) {
+        // The mode was checked against the cloud when it was set (set_cloud falls back to RGB
+        // without labels); white is what a point would get otherwise.
+        match Colouring::new(&self.cloud, self.colour_mode, self.depth_range) {
+            Ok(colouring) => {
+                let mark = self.flag_style == FlagStyle::Mark;
+                for i in self.shown_range(first, count) {
+                    if mark && self.is_flagged(i) {
+                        out.extend([FLAG_COLOUR; 2]);
+                    } else {
+                        out.extend(colouring.pair(i));
+                    }
+                }
+            }
+            Err(_) => out.extend(self.shown_range(first, count).flat_map(|_| [[255; 4]; 2])),
+        }
     }
 
     pub fn camera(&self) -> &Camera {
@@ -328,21 +450,24 @@ impl View {
         self.background
     }
 
-    /// Re-selects the drawn points under the budget and repacks positions and colours.
+    /// Re-selects the drawn points under the budget; their positions and colours change.
     fn select_points(&mut self) {
-        self.shown = decimate(self.cloud.len(), self.budget);
-        let homogeneous = |[x, y, z]: [f32; 3]| [x, y, z, 1.0];
-        self.positions = Vec::with_capacity(self.shown.len() * 2);
-        for &i in &self.shown {
-            self.positions
-                .push(homogeneous(self.cloud.pos1()[i as usize]));
-            self.positions
-                .push(homogeneous(self.cloud.pos2()[i as usize]));
-        }
+        let n = self.cloud.len();
+        self.shown = if self.flag_style == FlagStyle::Hide && self.flagged.contains(&true) {
+            let kept: Vec<u32> = (0..n)
+                .filter(|&i| !self.is_flagged(i))
+                .map(|i| i as u32)
+                .collect();
+            let chosen = decimate(kept.len(), self.budget);
+            Some(if chosen.len() == kept.len() {
+                kept
+            } else {
+                chosen.iter().map(|&k| kept[k as usize]).collect()
+            })
+        } else {
+            (n > self.budget).then(|| decimate(n, self.budget))
+        };
         self.positions_version += 1;
-        // The mode was valid for the cloud (set_cloud falls back to RGB without labels).
-        self.colours = point_colours(&self.cloud, &self.shown, self.colour_mode)
-            .unwrap_or_else(|_| vec![[255; 4]; 2 * self.shown.len()]);
         self.colours_version += 1;
     }
 }
@@ -352,6 +477,14 @@ mod tests {
     use glam::Vec3;
 
     use super::*;
+
+    /// All packed positions and colours of the drawn points.
+    fn packed(view: &View) -> (Vec<[f32; 4]>, Vec<[u8; 4]>) {
+        let (mut positions, mut colours) = (Vec::new(), Vec::new());
+        view.pack_positions(0, usize::MAX, &mut positions);
+        view.pack_colours(0, usize::MAX, &mut colours);
+        (positions, colours)
+    }
 
     #[test]
     fn a_camera_carries_over_to_another_view_of_the_same_cloud() {
@@ -401,18 +534,18 @@ mod tests {
         let mut view = View::default();
         view.set_viewport(800, 600, 2.0);
         view.set_cloud(two_point_cloud(None));
-        let (positions, version) = view.positions();
+        let (positions, colours) = packed(&view);
         assert_eq!(
             positions,
-            &[
+            [
                 [0.0, 0.0, 4.0, 1.0],
                 [0.5, 0.0, 4.0, 1.0],
                 [1.0, 0.5, 6.0, 1.0],
                 [1.0, 0.5, 6.0, 1.0]
             ]
         );
-        assert!(version > 0);
-        assert_eq!(view.colours().0.len(), 4);
+        assert!(view.positions_version() > 0);
+        assert_eq!(colours.len(), 4);
         assert!(view.camera().eye().abs_diff_eq(Vec3::ZERO, 1e-4));
         let u = view.uniforms();
         assert_eq!(u.viewport_px, [800.0, 600.0]);
@@ -427,12 +560,47 @@ mod tests {
         let mut view = View::new(100);
         view.set_cloud(cloud);
         assert_eq!((view.shown_len(), view.cloud_len()), (100, 1000));
-        let (_, before) = view.positions();
+        let before = view.positions_version();
         view.set_point_budget(400);
         assert_eq!(view.shown_len(), 400);
-        assert_eq!(view.positions().0.len(), 400 * 2);
-        assert_eq!(view.colours().0.len(), 400 * 2);
-        assert!(view.positions().1 > before);
+        let (positions, colours) = packed(&view);
+        assert_eq!(positions.len(), 400 * 2);
+        assert_eq!(colours.len(), 400 * 2);
+        assert!(view.positions_version() > before);
+        // Packing in slices gives the same as packing at once.
+        let mut sliced = Vec::new();
+        for first in (0..400).step_by(64) {
+            view.pack_positions(first, 64, &mut sliced);
+        }
+        assert_eq!(sliced, positions);
+    }
+
+    #[test]
+    fn flagged_superpixels_are_marked_or_hidden() {
+        let mut view = View::default();
+        view.set_cloud(two_point_cloud(Some(&[3, 4])));
+        view.set_flagged(&[4], FlagStyle::Mark).unwrap();
+        let (_, colours) = packed(&view);
+        assert_eq!(
+            colours,
+            [[255, 0, 0, 255], [255, 0, 0, 255], FLAG_COLOUR, FLAG_COLOUR]
+        );
+        view.set_flagged(&[4], FlagStyle::Hide).unwrap();
+        assert_eq!((view.shown_len(), view.cloud_len()), (1, 2));
+        assert_eq!(
+            packed(&view).0,
+            [[0.0, 0.0, 4.0, 1.0], [0.5, 0.0, 4.0, 1.0]]
+        );
+        // The flags stay for the next cloud; a cloud without labels has nothing flagged.
+        view.set_cloud(two_point_cloud(Some(&[4, 4])));
+        assert_eq!(view.shown_len(), 0);
+        view.set_cloud(two_point_cloud(None));
+        assert_eq!(view.shown_len(), 2);
+        view.set_flagged(&[], FlagStyle::Hide).unwrap();
+        assert!(view.set_flagged(&[u32::MAX], FlagStyle::Hide).is_err());
+        view.set_cloud(two_point_cloud(Some(&[3, 4])));
+        assert_eq!(view.shown_len(), 2);
+        assert!("blink".parse::<FlagStyle>().is_err());
     }
 
     #[test]
@@ -461,7 +629,7 @@ mod tests {
         view.set_colour_mode(ColourMode::Superpixel).unwrap();
         view.set_cloud(two_point_cloud(None));
         assert_eq!(view.colour_mode(), ColourMode::Rgb);
-        assert_eq!(view.colours().0[0], [255, 0, 0, 255]);
+        assert_eq!(packed(&view).1[0], [255, 0, 0, 255]);
     }
 
     #[test]

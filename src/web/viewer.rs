@@ -38,7 +38,7 @@ use crate::render::colour::ColourMode;
 use crate::render::controls::Drag;
 use crate::render::decimate::{DESKTOP_POINT_BUDGET, MOBILE_POINT_BUDGET};
 use crate::render::gpu::{BackendChoice, Gpu};
-use crate::render::view::View;
+use crate::render::view::{FlagStyle, View};
 
 /// What the viewer owns besides its event listeners: the state, the GPU and the canvas.
 struct Inner {
@@ -185,26 +185,94 @@ impl Viewer {
     }
 
     /// Shows a cloud from the home view (through camera 1, framed on the cloud).
-    /// `pos1`: x, y, z per point (frame 1, camera 1's OpenCV frame); `pos2`: the same points in
-    /// frame 2 (same frame of reference), or `null`/`undefined` for a still cloud; `rgb`: r, g, b
-    /// bytes per point; `labels`: a superpixel id per point, or `null`/`undefined`. Points with
-    /// a non-finite coordinate are left out. Throws when the lengths disagree.
+    /// `pos1`: x, y, z per point (frame 1, camera 1's OpenCV frame), a `Float32Array`; `pos2`:
+    /// the same points in frame 2 (same frame of reference), or `null`/`undefined` for a still
+    /// cloud; `rgb`: r, g, b bytes per point, a `Uint8Array`; `labels`: a superpixel id per
+    /// point, a `Uint32Array`, or `null`/`undefined`. Plain arrays of numbers are taken too.
+    /// Points with a non-finite coordinate are left out. The buffers are read a slice at a time
+    /// (never copied whole into wasm memory), and the previous cloud is freed before the new
+    /// one is built, so the viewer holds one cloud (31 bytes per point) at a time. Throws when
+    /// the lengths disagree or a buffer is of the wrong kind (the previous cloud stays then).
     #[wasm_bindgen(js_name = setCloud)]
     pub fn set_cloud(
         &self,
-        pos1: Vec<f32>,
-        pos2: Option<Vec<f32>>,
-        rgb: Vec<u8>,
-        labels: Option<Vec<u32>>,
+        pos1: &JsValue,
+        pos2: &JsValue,
+        rgb: &JsValue,
+        labels: &JsValue,
     ) -> Result<(), JsError> {
-        let cloud = PointCloud::new(&pos1, pos2.as_deref(), &rgb, labels.as_deref())?;
-        // The cloud has its own copies: free the arguments before the view packs the points,
-        // so that large clouds do not hold three copies at once.
-        drop((pos1, pos2, rgb, labels));
+        let absent = |v: &JsValue| v.is_null() || v.is_undefined();
+        let pos1 = typed(
+            pos1,
+            "frame-1 positions",
+            "Float32Array",
+            js_sys::Float32Array::new,
+        )?;
+        let pos2 = (!absent(pos2))
+            .then(|| {
+                typed(
+                    pos2,
+                    "frame-2 positions",
+                    "Float32Array",
+                    js_sys::Float32Array::new,
+                )
+            })
+            .transpose()?;
+        let rgb = typed(rgb, "colours", "Uint8Array", js_sys::Uint8Array::new)?;
+        let labels = (!absent(labels))
+            .then(|| typed(labels, "labels", "Uint32Array", js_sys::Uint32Array::new))
+            .transpose()?;
+        let n = PointCloud::check_lengths(
+            pos1.length() as usize,
+            pos2.as_ref().map(|a| a.length() as usize),
+            rgb.length() as usize,
+            labels.as_ref().map(|a| a.length() as usize),
+        )?;
+        let old = self.inner.borrow_mut().view.take_cloud();
+        drop(old);
+        let mut cloud = PointCloud::with_capacity(n, labels.is_some());
+        let (mut p1, mut p2, mut c, mut l) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+        for first in (0..n).step_by(CLOUD_SLICE) {
+            let end = (first + CLOUD_SLICE).min(n);
+            let read_f32 = |array: &js_sys::Float32Array, out: &mut Vec<f32>| {
+                out.resize(3 * (end - first), 0.0);
+                array
+                    .subarray(3 * first as u32, 3 * end as u32)
+                    .copy_to(out);
+            };
+            read_f32(&pos1, &mut p1);
+            if let Some(pos2) = &pos2 {
+                read_f32(pos2, &mut p2);
+            }
+            c.resize(3 * (end - first), 0);
+            rgb.subarray(3 * first as u32, 3 * end as u32)
+                .copy_to(&mut c);
+            if let Some(labels) = &labels {
+                l.resize(end - first, 0);
+                labels.subarray(first as u32, end as u32).copy_to(&mut l);
+            }
+            cloud.extend(
+                &p1,
+                pos2.is_some().then_some(&p2[..]),
+                &c,
+                labels.is_some().then_some(&l[..]),
+            )?;
+        }
         self.update(|view| {
             view.set_cloud(cloud);
             Ok(())
         })
+    }
+
+    /// Flags the points of the superpixels `labels` (a `Uint32Array` or an array of numbers; the
+    /// page flags those whose scale is unknown) and shows them as `style` says: `"show"` (like
+    /// the others), `"mark"` (magenta, whatever the colour mode) or `"hide"` (not drawn:
+    /// `shownPointCount` drops). The flags stay for later clouds of the same labels. Throws for
+    /// another style or a label of 2²⁴ or more.
+    #[wasm_bindgen(js_name = setFlagged)]
+    pub fn set_flagged(&self, labels: Vec<u32>, style: &str) -> Result<(), JsError> {
+        let style: FlagStyle = style.parse()?;
+        self.update(|view| view.set_flagged(&labels, style))
     }
 
     /// Morph parameter t in [0, 1]: points are drawn at X + t·(X' − X), so 0 is frame 1, 1 is
@@ -624,6 +692,30 @@ fn default_point_budget() -> usize {
         MOBILE_POINT_BUDGET
     } else {
         DESKTOP_POINT_BUDGET
+    }
+}
+
+/// Points read from JavaScript's buffers at a time by [`Viewer::set_cloud`] (64 Ki points:
+/// 1.9 MiB of scratch).
+const CLOUD_SLICE: usize = 1 << 16;
+
+/// `value` as a typed array of kind `T` (`kind` names it): the array itself, or a copy of a plain
+/// JavaScript array made by `copy` (the typed array's constructor); an error naming the buffer
+/// (`what`) for anything else.
+fn typed<T: JsCast + Clone>(
+    value: &JsValue,
+    what: &str,
+    kind: &str,
+    copy: impl FnOnce(&JsValue) -> T,
+) -> Result<T, RenderError> {
+    if let Some(array) = value.dyn_ref::<T>() {
+        Ok(array.clone())
+    } else if js_sys::Array::is_array(value) {
+        Ok(copy(value))
+    } else {
+        Err(RenderError::InvalidParameter(format!(
+            "point cloud: {what} must be a {kind} (or an array of numbers)"
+        )))
     }
 }
 

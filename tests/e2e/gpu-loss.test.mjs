@@ -59,6 +59,10 @@ for (const backend of ['webgl2', 'webgpu']) {
     await page.locator('#view').scrollIntoViewIfNeeded();
     await orbit(page, 0.4, 0.5); // away from the home view, so that the camera is checked
     await page.selectOption('#colour-mode', 'depth');
+    await page.selectOption('#unknown-scale', 'hide');
+    const hidden = () => page.evaluate(() => window.soupPage.viewer.pointCount - window.soupPage.viewer.shownPointCount);
+    await page.waitForFunction(() => window.soupPage.viewer.shownPointCount < window.soupPage.viewer.pointCount);
+    const hiddenBefore = await hidden();
     const before = await analyseView(page);
     assert.ok(before.drawn > 0.2, `only ${before.drawn} of the view is drawn`);
     const camera = await page.evaluate(() => Array.from(window.soupPage.viewer.camera));
@@ -69,6 +73,7 @@ for (const backend of ['webgl2', 'webgpu']) {
     assert.equal(await page.evaluate(() => document.body.dataset.backend), backend);
     const restoredCamera = await page.evaluate(() => Array.from(window.soupPage.viewer.camera));
     restoredCamera.forEach((v, i) => assert.ok(Math.abs(v - camera[i]) < 1e-5, `camera ${restoredCamera} vs ${camera}`));
+    assert.equal(await hidden(), hiddenBefore, 'the unknown-scale pieces stay hidden');
     const restored = await analyseView(page);
     assert.ok(restored.drawn > 0.2, `only ${restored.drawn} of the restored view is drawn`);
     assert.ok(difference(before, restored) < 0.02, `the restored view differs by ${difference(before, restored)}`);

@@ -76,6 +76,29 @@ test('the sample through the file input, drawn with WebGPU, with every download'
   }
   await page.selectOption('#soup-mode', 'organised');
 
+  // Unknown-scale pieces (report confidence below min_confidence): hidden, the drawn points drop
+  // by exactly the points of those superpixels (counted in the worker's cloud), in both soups;
+  // marked, every point is drawn again.
+  const unknownPoints = (soup) => page.evaluate(async (soup) => {
+    const { bytes } = await window.soupPage.pipeline.request('export', { name: 'report.json' });
+    const { confidence, params } = JSON.parse(new TextDecoder().decode(bytes));
+    const { cloud } = await window.soupPage.pipeline.request('cloud', { soup });
+    return cloud.labels.filter((label) => confidence[label] < params.scales.min_confidence).length;
+  }, soup);
+  const hiddenIs = (n) => page.waitForFunction(
+    (n) => window.soupPage.viewer.pointCount - window.soupPage.viewer.shownPointCount === n, n, { timeout: 60_000 });
+  const unknownOrganised = await unknownPoints('organised');
+  assert.ok(unknownOrganised > 0, 'the sample has superpixels of unknown scale');
+  await page.selectOption('#unknown-scale', 'hide');
+  await hiddenIs(unknownOrganised);
+  await page.selectOption('#soup-mode', 'unorganised');
+  await hiddenIs(await unknownPoints('unorganised'));
+  await page.selectOption('#soup-mode', 'organised');
+  await hiddenIs(unknownOrganised);
+  await page.selectOption('#unknown-scale', 'mark');
+  await hiddenIs(0);
+  await page.selectOption('#unknown-scale', 'show');
+
   // Stage pictures at the working size, not blank.
   for (const id of ['picture-depth', 'picture-superpixels', 'picture-flow', 'picture-confidence', 'picture-unorganised', 'picture-organised']) {
     const { width, height, colours } = await page.$eval(`#${id}`, (canvas) => {
@@ -97,7 +120,8 @@ test('the sample through the file input, drawn with WebGPU, with every download'
     assert.equal(ply.header[0], 'ply');
     assert.equal(ply.header[1], 'format binary_little_endian 1.0');
     assert.equal(ply.vertices, count, file);
-    assert.equal(ply.bodyLength, count * 15, file); // 3 floats + 3 bytes per vertex
+    assert.ok(ply.header.includes('property float confidence'), file);
+    assert.equal(ply.bodyLength, count * 19, file); // 3 floats + 3 bytes + 1 float per vertex
   }
   const depth = await download(page, 'depth16.png');
   assert.deepEqual(readPngHeader(depth), { width: 768, height: 328, bitDepth: 16, colourType: 0 });
@@ -176,7 +200,10 @@ test('cancel stops a run at once and the next run works', async () => {
   // The worker was replaced; the same frames run again.
   await page.click('#run-button');
   assert.equal(await waitForRunEnd(page), 'done', await alertText(page));
-  assert.equal(await page.evaluate(() => window.soupPage.workerStartMs.length), 2);
+  // Started: at load, after the cancel, and after the run handed over its result (the worker
+  // that ran is replaced to free its memory; www/pipeline.js).
+  await page.evaluate(() => window.soupPage.pipeline.ready);
+  assert.equal(await page.evaluate(() => window.soupPage.workerStartMs.length), 3);
   assert.deepEqual(errors, []);
   await page.context().close();
 });

@@ -7,7 +7,7 @@
 //
 // document.body.dataset.saved: "yes" once the last result is stored, "" otherwise (tests).
 
-import { $, page } from './ui.js';
+import { $, freeArrays, page } from './ui.js';
 import { formIntrinsics } from './params.js';
 
 const DB_NAME = 'superpixel-soup';
@@ -89,6 +89,8 @@ export async function saveSession(result) {
   } catch (e) {
     // Private browsing or a full disk: the page works on without it.
     console.warn(`the result could not be kept for a reload: ${e.message ?? e}`);
+  } finally {
+    freeArrays(...frames.map((frame) => frame.pixels.data));
   }
 }
 

@@ -10,6 +10,8 @@ import { showCloud } from './view3d.js';
 export async function showResult(result) {
   showPictures(result);
   page.points = result.cloud.count;
+  const { confidence, params } = result.report;
+  page.unconfident = confidence.flatMap((c, label) => (c < params.scales.min_confidence ? [label] : []));
   $('soup-mode').value = 'organised';
   await showCloud(result.cloud);
 }

@@ -14,7 +14,7 @@
 
 import { CancelledError } from '../pipeline.js';
 import { wireViewerControls } from '../viewer-controls.js';
-import { $, BACKEND, page, showAlert } from './ui.js';
+import { $, BACKEND, freeArrays, page, showAlert } from './ui.js';
 
 const BACKEND_NAMES = { webgpu: 'WebGPU', webgl2: 'WebGL2' };
 
@@ -49,6 +49,7 @@ export function loadViewer() {
       wasm = await import('../pkg/superpixel_soup.js');
       await wasm.default();
       const viewer = await openViewer($('view'), BACKEND);
+      viewer.setFlagged(page.unconfident, $('unknown-scale').value);
       page.viewer = viewer;
       page.viewerReadyMs = performance.now();
       document.body.dataset.backend = viewer.backend;
@@ -108,9 +109,11 @@ async function restore(what, { backend, camera }) {
   canvas.replaceWith(fresh);
   try {
     const viewer = await openViewer(fresh, backend);
+    viewer.setFlagged(page.unconfident, $('unknown-scale').value);
     if (page.points > 0) {
       const { cloud } = await page.pipeline.request('cloud', { soup: soupShown });
       viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
+      freeCloud(cloud);
       viewer.setCamera(camera);
     }
     viewer.setMorph(Number($('morph').value));
@@ -135,15 +138,32 @@ async function restore(what, { backend, camera }) {
   }
 }
 
-/** Shows `cloud` (positions in both frames, colours, labels) in the 3D view, if there is one. */
+/**
+ * Shows `cloud` (positions in both frames, colours, labels) in the 3D view, if there is one.
+ * The cloud's arrays are freed (the viewer has its own copy; the worker gives it again).
+ */
 export async function showCloud(cloud, soup = 'organised') {
   const viewer = await page.viewerReady;
   soupShown = soup;
   await restoring;
   if (viewer !== null && page.viewer !== null) {
+    showUnknownScale();
     page.viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
     page.viewer.render();
   }
+  freeCloud(cloud);
+}
+
+function freeCloud(cloud) {
+  freeArrays(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
+}
+
+/**
+ * Flags the superpixels of the last result whose scale no contact pins (`page.unconfident`) in
+ * the 3D view, shown as #unknown-scale says: like the others, marked magenta, or hidden.
+ */
+export function showUnknownScale() {
+  page.viewer?.setFlagged(page.unconfident, $('unknown-scale').value);
 }
 
 /** Shows the soup chosen in #soup-mode: organised (the result), scaled (before the refinement) or unorganised (λ = 1). */

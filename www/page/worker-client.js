@@ -3,7 +3,9 @@
 // reconstruction on the current frames and cancels it (by restarting the worker).
 
 import { CancelledError, Pipeline } from '../pipeline.js';
-import { $, WORKER_MODULE, begin, fail, page, sentence, setState, setStatus, showAlert } from './ui.js';
+import {
+  $, WORKER_MODULE, begin, fail, freeArrays, page, sentence, setState, setStatus, showAlert,
+} from './ui.js';
 import { fillForm, readOptions } from './params.js';
 import { pixelsForRun } from './input.js';
 import { fillTimings, showResult } from './results.js';
@@ -109,6 +111,16 @@ export async function run({ resizeSecond = false, restored = false } = {}) {
     if (!current()) {
       return;
     }
+    // The worker's memory goes before the 3D view takes its own (www/pipeline.js, Memory); the
+    // worker computes the same result again from the same frames and options when shown. The
+    // frames are copied now (working size, a few MiB): the user may replace the page's frames
+    // before that second computation starts, and the shown result must still be computable.
+    const kept = await Promise.all(page.frames.map((frame) => createImageBitmap(frame.bitmap)));
+    if (!current()) {
+      kept.forEach((frame) => frame.close());
+      return;
+    }
+    page.pipeline.release(async () => ({ frames: kept, options }));
     await showResult(result);
     const finished = performance.now();
     page.lastRun = {
@@ -130,9 +142,14 @@ export async function run({ resizeSecond = false, restored = false } = {}) {
     setStatus(`${restored ? 'Restored your last result (computed again)' : 'Done'} in ` +
       `${(page.lastRun.totalMs / 1000).toFixed(1)} s: ${result.cloud.count.toLocaleString('en')} points.`);
     setState('done');
-    await scorePending();
+    await saveSession(result);
+    freeArrays(...Object.values(result.pictures)); // drawn and kept: not needed any more
     if (current()) {
-      await saveSession(result);
+      await scorePending();
+    }
+    if (current()) {
+      // Clouds, downloads and scores need the result in the worker: computed again now.
+      page.pipeline.recompute().catch(() => {});
     }
   } catch (e) {
     if (e instanceof CancelledError || !current()) {

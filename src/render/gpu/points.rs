@@ -22,6 +22,10 @@ const POSITION_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba32Float;
 const COLOUR_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Rgba8Unorm;
 /// Vertices per point: one triangle around the square.
 const VERTICES_PER_POINT: u32 = 3;
+/// Texture rows uploaded at a time (32 768 points: 1 MiB of positions): the points are packed
+/// and copied a slice at a time, so neither the view nor wgpu's staging (a CPU-side copy in wasm
+/// memory on WebGL2) ever holds the whole packed cloud.
+const UPLOAD_ROWS: usize = 32;
 /// Depth buffer format (WebGPU and WebGL2 both render to it).
 const DEPTH_FORMAT: wgpu::TextureFormat = wgpu::TextureFormat::Depth32Float;
 
@@ -168,11 +172,10 @@ impl PointPass {
     }
 
     /// Copies the view's packed positions and colours into the textures when their versions
-    /// changed, making taller textures when the points outgrew them.
+    /// changed, a few rows at a time ([`UPLOAD_ROWS`]), making taller textures when the points
+    /// outgrew them.
     fn upload(&mut self, device: &wgpu::Device, queue: &wgpu::Queue, view: &View) {
-        let (positions, positions_version) = view.positions();
-        let (colours, colours_version) = view.colours();
-        let texels = positions.len().min(colours.len());
+        let texels = 2 * view.shown_len();
         let rows = texels.div_ceil(TEXTURE_WIDTH as usize).max(1) as u32;
         if rows > self.textures.rows {
             // Grow by powers of two so that a slowly growing cloud does not reallocate often.
@@ -182,26 +185,45 @@ impl PointPass {
             self.textures =
                 PointTextures::new(device, &self.bind_group_layout, &self.uniforms, rows);
         }
+        // What fits the textures (a budget larger than the GPU allows is capped by the viewer).
+        let points = view
+            .shown_len()
+            .min(self.textures.rows as usize * (TEXTURE_WIDTH / 2) as usize);
+        let points_per_upload = UPLOAD_ROWS * (TEXTURE_WIDTH / 2) as usize;
         let textures = &mut self.textures;
-        if textures.positions_version != Some(positions_version) {
-            write_texels(
-                queue,
-                &textures.positions,
-                bytemuck::cast_slice(&positions[..texels]),
-                16,
-            );
-            textures.positions_version = Some(positions_version);
+        if textures.positions_version != Some(view.positions_version()) {
+            let mut packed = Vec::with_capacity(2 * points_per_upload.min(points));
+            for first in (0..points).step_by(points_per_upload) {
+                packed.clear();
+                view.pack_positions(first, points_per_upload.min(points - first), &mut packed);
+                let row = 2 * first / TEXTURE_WIDTH as usize;
+                write_texels(
+                    queue,
+                    &textures.positions,
+                    bytemuck::cast_slice(&packed),
+                    16,
+                    row,
+                );
+            }
+            textures.positions_version = Some(view.positions_version());
         }
-        if textures.colours_version != Some(colours_version) {
-            write_texels(
-                queue,
-                &textures.colours,
-                bytemuck::cast_slice(&colours[..texels]),
-                4,
-            );
-            textures.colours_version = Some(colours_version);
+        if textures.colours_version != Some(view.colours_version()) {
+            let mut packed = Vec::with_capacity(2 * points_per_upload.min(points));
+            for first in (0..points).step_by(points_per_upload) {
+                packed.clear();
+                view.pack_colours(first, points_per_upload.min(points - first), &mut packed);
+                let row = 2 * first / TEXTURE_WIDTH as usize;
+                write_texels(
+                    queue,
+                    &textures.colours,
+                    bytemuck::cast_slice(&packed),
+                    4,
+                    row,
+                );
+            }
+            textures.colours_version = Some(view.colours_version());
         }
-        self.count = u32::try_from(texels / 2).unwrap_or(u32::MAX);
+        self.count = u32::try_from(points).unwrap_or(u32::MAX);
     }
 
     /// The depth buffer for `size`, made anew when the size changed.
@@ -345,9 +367,16 @@ impl PointTextures {
     }
 }
 
-/// Writes `bytes` (texels of `texel_bytes` bytes each) into `texture` from its first texel on,
-/// row by row: the full rows in one copy, the rest of the last row in another.
-fn write_texels(queue: &wgpu::Queue, texture: &wgpu::Texture, bytes: &[u8], texel_bytes: usize) {
+/// Writes `bytes` (texels of `texel_bytes` bytes each) into `texture` from the first texel of
+/// row `first_row` on, row by row: the full rows in one copy, the rest of the last row in
+/// another.
+fn write_texels(
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    bytes: &[u8],
+    texel_bytes: usize,
+    first_row: usize,
+) {
     let row_bytes = TEXTURE_WIDTH as usize * texel_bytes;
     let full_rows = bytes.len() / row_bytes;
     let rest = bytes.len() % row_bytes;
@@ -358,7 +387,7 @@ fn write_texels(queue: &wgpu::Queue, texture: &wgpu::Texture, bytes: &[u8], texe
                 mip_level: 0,
                 origin: wgpu::Origin3d {
                     x: 0,
-                    y: row as u32,
+                    y: (first_row + row) as u32,
                     z: 0,
                 },
                 aspect: wgpu::TextureAspect::All,
