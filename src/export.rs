@@ -95,11 +95,14 @@ pub fn encode(rec: &Reconstruction, file: ExportFile, ply_encoding: Encoding) ->
         ExportFile::DepthPfm => Ok(pfm::encode(&rec.depth_input)),
         ExportFile::DepthPng16 => png16::encode_depth(&rec.depth_input),
         ExportFile::DepthPicture => encode_png(&depth_picture(&rec.depth_input)),
-        ExportFile::Frame1Ply => {
-            ply::encode_with_confidence(&rec.cloud1, Some(&point_confidence(rec)), ply_encoding)
-        }
-        ExportFile::Frame2Ply => {
-            ply::encode_with_confidence(&rec.cloud2, Some(&point_confidence(rec)), ply_encoding)
+        ExportFile::Frame1Ply | ExportFile::Frame2Ply => {
+            let (cloud1, cloud2) = rec.clouds();
+            let cloud = if file == ExportFile::Frame1Ply {
+                cloud1
+            } else {
+                cloud2
+            };
+            ply::encode_with_confidence(&cloud, Some(&point_confidence(rec)), ply_encoding)
         }
         ExportFile::Flow => Ok(flo::encode(&resize_flow(&rec.flow, input_w, input_h))),
         ExportFile::Labels => png16::encode_labels(&rec.superpixels.labels),

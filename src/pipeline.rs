@@ -8,6 +8,7 @@ use crate::camera::Camera;
 use crate::error::{Error, Result};
 use crate::flow::{FlowField, FlowParams, compute_flow, is_known, resize_flow};
 use crate::grid::Grid;
+use crate::image::Frame;
 use crate::input::FramePair;
 use crate::output::{PointCloud, dense_depth, depth_at, point_clouds, scene_flow};
 use crate::soup::Soup;
@@ -138,11 +139,34 @@ pub struct Reconstruction {
     pub depth: Grid<f32>,
     /// Frame-1 depth at the input resolution (NaN = unknown).
     pub depth_input: Grid<f32>,
-    pub cloud1: PointCloud,
-    pub cloud2: PointCloud,
-    /// Per pixel of frame 1 (working resolution): X' − X, NaN where unknown.
-    pub scene_flow: Grid<[f32; 3]>,
+    /// The reference frame at the working resolution (the points' colours).
+    pub frame1: Frame,
     pub report: Report,
+}
+
+impl Reconstruction {
+    /// The point clouds of frame 1 and frame 2 (see [`point_clouds`]). Computed when asked (a
+    /// few ms) rather than kept: at 1024 × 768 they would be 24 MB of every result's memory.
+    pub fn clouds(&self) -> (PointCloud, PointCloud) {
+        point_clouds(
+            &self.soup,
+            &self.superpixels.labels,
+            &self.depth,
+            &self.frame1,
+            &self.report.camera.intrinsics,
+        )
+    }
+
+    /// Per pixel of frame 1 (working resolution): the scene flow X' − X in camera 1's frame,
+    /// NaN where unknown (see [`scene_flow`]). Computed when asked, like [`Self::clouds`].
+    pub fn scene_flow(&self) -> Grid<[f32; 3]> {
+        scene_flow(
+            &self.soup,
+            &self.superpixels.labels,
+            &self.depth,
+            &self.report.camera.intrinsics,
+        )
+    }
 }
 
 /// Reconstructs both frames of `pair`. `progress(stage, fraction)` is called as stages start and
@@ -222,8 +246,6 @@ pub fn reconstruct(
     let (sx, sy) = pair.scale();
     let k_input = k.scaled(1.0 / sx, 1.0 / sy);
     let depth_input = depth_at(&soup, &sp.labels, iw, ih, &k_input);
-    let (cloud1, cloud2) = point_clouds(&soup, &sp.labels, &depth, &pair.frame1, &k);
-    let scene_flow = scene_flow(&soup, &sp.labels, &depth, &k);
     timings.push((Stage::Outputs, clock.lap()));
     progress(Stage::Outputs, 1.0);
 
@@ -263,9 +285,7 @@ pub fn reconstruct(
         soup,
         depth,
         depth_input,
-        cloud1,
-        scene_flow,
-        cloud2,
+        frame1: pair.frame1.clone(),
         report,
     })
 }

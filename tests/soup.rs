@@ -166,14 +166,16 @@ fn synthetic_scenes_with_exact_flow() {
         );
         assert!(m.mre < bound, "{}: MRE {}", kind.name(), m.mre);
         assert!(m.coverage > 0.95);
-        assert_eq!(rec.cloud1.positions.len(), rec.cloud2.positions.len());
+        let (cloud1, cloud2) = rec.clouds();
+        assert_eq!(cloud1.positions.len(), cloud2.positions.len());
+        let scene_flow = rec.scene_flow();
         // Frame 2's points project where the flow says: X' = X + scene flow lands on x + f(x).
         let k = rec.report.camera.intrinsics;
         let mut errors: Vec<f64> = Vec::new();
         for y in (0..rec.depth.height()).step_by(7) {
             for x in (0..rec.depth.width()).step_by(7) {
                 let z = *rec.depth.get(x, y) as f64;
-                let d = rec.scene_flow.get(x, y);
+                let d = scene_flow.get(x, y);
                 if !z.is_finite() || !d[0].is_finite() {
                     continue;
                 }

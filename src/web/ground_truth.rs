@@ -104,7 +104,7 @@ impl PageReconstruction {
         let metrics = depth_metrics(&gt, &est)?;
         let errors = relative_errors(&gt, &est, metrics.scale)?;
         drop(est);
-        let (w, h) = self.frame1.size();
+        let (w, h) = self.rec.frame1.size();
         let picture = resample(&relative_error_picture(&errors), w, h);
         let (colours, errors) = relative_error_legend(64);
         let answer = serde_json::to_string(&DepthAnswer {

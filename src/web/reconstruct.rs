@@ -269,7 +269,6 @@ pub fn reconstruct(
         rec.report.input_size = size;
     }
     Ok(PageReconstruction {
-        frame1: pair.frame1,
         rec,
         ground_truth: GroundTruthScores::default(),
     })
@@ -278,8 +277,6 @@ pub fn reconstruct(
 /// A reconstruction kept in wasm memory; the worker takes what the page shows and downloads.
 #[wasm_bindgen]
 pub struct PageReconstruction {
-    /// The reference frame at the working resolution.
-    pub(super) frame1: Frame,
     pub(super) rec: Reconstruction,
     /// Scores against the user's ground truth ([`super::ground_truth`]), added to the report.
     pub(super) ground_truth: GroundTruthScores,
@@ -295,7 +292,7 @@ impl PageReconstruction {
         if rec.depth_input.size() == (iw, ih) {
             return Cow::Borrowed(&rec.depth_input);
         }
-        let (w, h) = self.frame1.size();
+        let (w, h) = self.rec.frame1.size();
         let k = rec
             .report
             .camera
@@ -343,13 +340,13 @@ impl PageReconstruction {
     /// Width of the working resolution, in pixels (the pictures' width).
     #[wasm_bindgen(getter)]
     pub fn width(&self) -> u32 {
-        self.frame1.width() as u32
+        self.rec.frame1.width() as u32
     }
 
     /// Height of the working resolution, in pixels.
     #[wasm_bindgen(getter)]
     pub fn height(&self) -> u32 {
-        self.frame1.height() as u32
+        self.rec.frame1.height() as u32
     }
 
     /// The point clouds of both frames, one point per pixel with a depth: `"organised"` (the
@@ -360,9 +357,10 @@ impl PageReconstruction {
         let labels = &self.rec.superpixels.labels;
         let k = &self.rec.report.camera.intrinsics;
         if soup == "organised" {
+            let (c1, c2) = self.rec.clouds();
             return Ok(CloudBuffers::new(
-                &self.rec.cloud1,
-                &self.rec.cloud2,
+                &c1,
+                &c2,
                 &cloud_labels(labels, &self.rec.depth),
             ));
         }
@@ -372,7 +370,7 @@ impl PageReconstruction {
             ))
         })?;
         let depth = self.depth_of(stage);
-        let (c1, c2) = point_clouds(stage, labels, &depth, &self.frame1, k);
+        let (c1, c2) = point_clouds(stage, labels, &depth, &self.rec.frame1, k);
         Ok(CloudBuffers::new(&c1, &c2, &cloud_labels(labels, &depth)))
     }
 
@@ -390,10 +388,10 @@ impl PageReconstruction {
         }
         let frame = match name {
             "depth" => depth_picture(&rec.depth),
-            "superpixels" => boundary_overlay(&self.frame1, &rec.superpixels, [255, 230, 0]),
+            "superpixels" => boundary_overlay(&self.rec.frame1, &rec.superpixels, [255, 230, 0]),
             "flow" => flow_picture_with_reliability(&rec.flow, &rec.reliable),
             "confidence" => confidence_picture(
-                &self.frame1,
+                &self.rec.frame1,
                 &rec.superpixels.labels,
                 &rec.report.confidence,
                 rec.report.params.scales.min_confidence,
