@@ -2,8 +2,9 @@
 // `soup synth`, the generator of www/sample/) with its exact depth as PFM through the picker, as
 // Sintel .dpt dropped on the page, and the exact flow as .flo: the MRE shown equals the MRE of
 // `soup eval` on the same files (the same Rust metrics on the same reconstruction), the error
-// picture is drawn, and report.json carries the scores. A ground truth of another size, a
-// damaged file and a depth PNG without a scale each give a message while the result stays.
+// picture is drawn, report.json carries the scores, and a reload scores the same files again. A
+// ground truth of another size, a damaged file and a depth PNG without a scale each give a
+// message while the result stays.
 //
 // Runs the `soup` CLI through `cargo run` (the dev profile, optimised, which `cargo test` in
 // check.sh has built already).
@@ -147,6 +148,15 @@ test('ground truth scored in the page equals soup eval, and bad files are explai
   assert.equal(report.ground_truth.depth.file, 'depth1.dpt');
   assert.equal(report.ground_truth.depth.metrics.mre, mre);
   assert.equal(report.ground_truth.flow.metrics.epe, epe);
+
+  // A reload restores the result and scores the same ground truth again.
+  await page.reload();
+  await page.waitForFunction(() => document.body.dataset.restored === 'shown');
+  assert.equal(await waitForState(page, ['done', 'error']), 'done', await alertText(page));
+  assert.equal(await scored(page), 'scored', await alertText(page));
+  assert.equal(Number(await page.getAttribute('#truth-results', 'data-mre')), mre);
+  assert.equal(Number(await page.getAttribute('#truth-results', 'data-epe')), epe);
+  assert.equal(await page.textContent('dd[data-metric="Depth ground truth"]'), 'depth1.dpt');
 
   // Bad files: a message each, the result stays and the scores shown stay.
   const expectMessage = async (files) => {

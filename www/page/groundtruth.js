@@ -3,11 +3,13 @@
 // after the run. The worker scores them with the library's metrics (src/web/ground_truth.rs, the
 // same code as `soup eval`); this module shows MRE, AbsRel, δ<1.25 (and EPE), the per-pixel
 // relative-error picture with its legend, and explains bad or mismatched files in the alert
-// while the result stays usable. The scores also go into the downloaded report.json.
+// while the result stays usable. The scores also go into the downloaded report.json. The files
+// scored last are kept with the stored result (persist.js), so a reload scores them again.
 //
 // document.body.dataset.truth: "" (nothing scored), "scoring", "scored" or "error" (tests).
 
 import { CancelledError } from '../pipeline.js';
+import { saveTruth } from './persist.js';
 import { $, page, sentence, showAlert } from './ui.js';
 
 /** Names of ground-truth files: depth (PFM, Sintel) and flow. */
@@ -31,8 +33,16 @@ function setTruthState(state) {
   document.body.dataset.truth = state;
 }
 
+/**
+ * The files scored against the result shown, the last of each kind: `depth` ({ file, pngScale },
+ * the scale of a 16-bit PNG) and `flow` (a File); kept with the stored result.
+ */
+const scoredFiles = { depth: null, flow: null };
+
 /** Clears the scores shown (a new run starts). */
 export function resetTruth() {
+  scoredFiles.depth = null;
+  scoredFiles.flow = null;
   rows.clear();
   $('truth-results').hidden = true;
   $('truth-figure').hidden = true;
@@ -67,6 +77,22 @@ export async function scorePending() {
   }
 }
 
+/**
+ * Ground truth kept with a restored result (`saveTruth`'s record): scored again once the
+ * restored run finishes, with the PNG scale it had.
+ */
+export function restoreTruth({ depth, flow }) {
+  if (depth !== null) {
+    if (depth.pngScale !== null) {
+      $('truth-scale').value = String(depth.pngScale);
+    }
+    pending.push(depth.file);
+  }
+  if (flow !== null) {
+    pending.push(flow);
+  }
+}
+
 /** Forgets files kept waiting (the user started over). */
 export function dropPending() {
   pending.length = 0;
@@ -90,6 +116,7 @@ async function scoreFiles(files) {
       showAlert(`${file.name}: ${message}${message.endsWith('.') ? '' : '.'}`);
     }
   }
+  await saveTruth({ ...scoredFiles });
   setTruthState(failed ? 'error' : 'scored');
 }
 
@@ -98,6 +125,7 @@ async function scoreFile(file) {
   if (/\.flo$/i.test(file.name)) {
     const { score } = await page.pipeline.request('score-flow', { name: file.name, bytes }, [bytes]);
     showFlowScore(score);
+    scoredFiles.flow = file;
     return;
   }
   const head = new Uint8Array(bytes, 0, Math.min(4, bytes.byteLength));
@@ -112,6 +140,7 @@ async function scoreFile(file) {
     [bytes],
   );
   showDepthScore(score, picture);
+  scoredFiles.depth = { file, pngScale: isPng ? scale : null };
 }
 
 /** Scores the last depth PNG again with the scale just entered. */

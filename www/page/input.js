@@ -5,7 +5,7 @@
 import { $, begin, clearAlert, fail, page, setState, setStatus, waitFor } from './ui.js';
 import { INTRINSIC_FIELDS, fillForm, refreshIntrinsics, setIntrinsics } from './params.js';
 import { cancel, resetProgress, run } from './worker-client.js';
-import { dropPending, isTruthFile, resetTruth, takeTruth } from './groundtruth.js';
+import { dropPending, isTruthFile, resetTruth, restoreTruth, takeTruth } from './groundtruth.js';
 import { clearSession, framesOf, loadSession, restoreForm } from './persist.js';
 import { showPictures } from './results.js';
 
@@ -424,6 +424,9 @@ export async function restoreLast() {
       return;
     }
     showPictures(record.outputs);
+    if (record.truth) {
+      restoreTruth(record.truth);
+    }
     document.body.dataset.restored = 'shown';
     if (record.intrinsics.mode === 'user') {
       await setFrames(frames, { intrinsics: record.intrinsics.values, source: record.intrinsics.source });

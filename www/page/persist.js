@@ -3,7 +3,8 @@
 // intrinsics, and the outputs shown: pictures, legend and report), so a reload of the tab, on
 // purpose or by mistake, loses nothing: the page shows the kept outputs at once, and runs the
 // (deterministic) reconstruction of the kept frames again for what the worker holds (the 3D
-// cloud, downloads, ground-truth scores), which gives the same outputs. "Start over" forgets it.
+// cloud, downloads, ground-truth scores), which gives the same outputs; ground-truth files scored
+// against it are kept too and scored again. "Start over" forgets it.
 //
 // document.body.dataset.saved: "yes" once the last result is stored, "" otherwise (tests).
 
@@ -91,6 +92,25 @@ export async function saveSession(result) {
     console.warn(`the result could not be kept for a reload: ${e.message ?? e}`);
   } finally {
     freeArrays(...frames.map((frame) => frame.pixels.data));
+  }
+}
+
+/**
+ * Keeps the ground-truth files scored against the stored result (`truth`: groundtruth.js's
+ * { depth, flow }) with it, so that a reload scores them again.
+ */
+export async function saveTruth(truth) {
+  const record = await loadSession();
+  if (record === null) {
+    return;
+  }
+  record.truth = truth;
+  try {
+    await withStore('readwrite', (store) => store.put(record, KEY));
+  } catch (e) {
+    console.warn(`the ground truth could not be kept for a reload: ${e.message ?? e}`);
+  } finally {
+    freeArrays(...record.frames.map((frame) => frame.pixels.data));
   }
 }
 
