@@ -37,7 +37,7 @@ export class Pipeline {
     this.pending = new Map();
     this.nextId = 1;
     this.ready = null;
-    /** After `release`: gives the released run's inputs again; null while the worker has them. */
+    /** After `release`: the released run's { frames, options }, until they are sent again. */
     this.inputs = null;
     /** The run computing the released result again, while it runs. */
     this.recomputing = null;
@@ -108,13 +108,16 @@ export class Pipeline {
   async request(type, payload = {}, transfer = []) {
     if (type === 'run' && (this.inputs !== null || this.recomputing !== null)) {
       this.restart(); // the released result is superseded
-    } else if (NEEDS_RESULT.has(type) && this.inputs !== null) {
+    } else if (NEEDS_RESULT.has(type) && (this.inputs !== null || this.recomputing !== null)) {
       await this.recompute();
     }
     return this.send(type, payload, transfer);
   }
 
-  /** Sends a request once the worker is ready; resolves with the reply message. */
+  /**
+   * Sends a request as it is once the worker is ready (no waiting for a released result: see
+   * `request`); resolves with the reply message.
+   */
   async send(type, payload, transfer) {
     await this.ready;
     const id = this.nextId++;
@@ -130,6 +133,7 @@ export class Pipeline {
    */
   restart(reason = new CancelledError()) {
     this.worker.terminate();
+    this.inputs?.frames.forEach((frame) => frame.close());
     this.inputs = null;
     this.recomputing = null;
     for (const { reject } of this.pending.values()) {
@@ -141,8 +145,8 @@ export class Pipeline {
 
   /**
    * Frees the memory of the worker that just handed over a run's result (module comment):
-   * replaces it by a fresh worker. `inputs()` resolves to `{ frames, options }` of that run
-   * again (new ImageBitmaps, transferred), for `recompute`.
+   * replaces it by a fresh worker, which is given `inputs` ({ frames: ImageBitmaps, owned and
+   * closed here, options }) of that run again by `recompute`.
    */
   release(inputs) {
     this.restart();
@@ -159,19 +163,9 @@ export class Pipeline {
       return this.recomputing ?? Promise.resolve();
     }
     if (this.recomputing === null) {
-      const inputs = this.inputs;
-      const worker = this.worker;
-      const recomputing = (async () => {
-        const { frames, options } = await inputs();
-        if (this.worker !== worker) {
-          frames.forEach((frame) => frame.close());
-          throw new CancelledError();
-        }
-        await this.send('run', { frames, options, quiet: true }, frames);
-        if (this.worker === worker) {
-          this.inputs = null;
-        }
-      })().finally(() => {
+      const { frames, options } = this.inputs;
+      this.inputs = null; // the frames go to the worker (transferred)
+      const recomputing = this.send('run', { frames, options, quiet: true }, frames).then(() => {}).finally(() => {
         if (this.recomputing === recomputing) {
           this.recomputing = null;
         }

@@ -148,8 +148,10 @@ impl<'a> Colouring<'a> {
 /// The colours of the points `shown` (indices into `cloud`) under `mode`: for each point its
 /// frame-1 colour then its frame-2 colour, as RGBA bytes (8 bytes per point). The depth range is
 /// taken from the frame-1 depths of the whole cloud, so decimation does not change the colours.
-/// Fails for [`ColourMode::Superpixel`] when the cloud has no labels.
-pub fn point_colours(cloud: &PointCloud, shown: &[u32], mode: ColourMode) -> Result<Vec<[u8; 4]>> {
+/// Fails for [`ColourMode::Superpixel`] when the cloud has no labels. (The view colours slices
+/// through [`Colouring`] directly; this whole-list form is what the tests compare.)
+#[cfg(test)]
+fn point_colours(cloud: &PointCloud, shown: &[u32], mode: ColourMode) -> Result<Vec<[u8; 4]>> {
     let colouring = Colouring::new(cloud, mode, Colouring::depth_range(cloud))?;
     Ok(shown
         .iter()

@@ -201,10 +201,13 @@ impl View {
     }
 
     /// Takes the cloud out (the view is left empty), e.g. to free its memory before a new one
-    /// is built.
+    /// is built. The colour mode stays for that next cloud (the empty one in between has no
+    /// labels, which would otherwise end a superpixel colouring).
     pub fn take_cloud(&mut self) -> PointCloud {
+        let mode = self.colour_mode;
         let cloud = std::mem::take(&mut self.cloud);
         self.set_cloud(PointCloud::default());
+        self.colour_mode = mode;
         cloud
     }
 
@@ -630,6 +633,17 @@ mod tests {
         view.set_cloud(two_point_cloud(None));
         assert_eq!(view.colour_mode(), ColourMode::Rgb);
         assert_eq!(packed(&view).1[0], [255, 0, 0, 255]);
+    }
+
+    #[test]
+    fn taking_the_cloud_out_keeps_the_colour_mode_for_the_next() {
+        let mut view = View::default();
+        view.set_cloud(two_point_cloud(Some(&[3, 4])));
+        view.set_colour_mode(ColourMode::Superpixel).unwrap();
+        let old = view.take_cloud();
+        assert_eq!((old.len(), view.cloud_len()), (2, 0));
+        view.set_cloud(two_point_cloud(Some(&[3, 4])));
+        assert_eq!(view.colour_mode(), ColourMode::Superpixel);
     }
 
     #[test]

@@ -412,6 +412,7 @@ pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams)
 /// of its pieces), then, with `descend`, the segment solve (step 2 alone) from there instead of
 /// its own starts: the truth test's "truth as segments", which shows whether one scale per
 /// rigid segment can hold the truth and whether the segment solve's minimum lies below it.
+/// Pieces past the end of `start`, or with a non-finite value, do not count.
 pub fn segment_descent_from(
     soup: &Soup,
     inputs: &ScaleInputs,
@@ -425,8 +426,8 @@ pub fn segment_descent_from(
     let centre = segment_centres(soup, inputs, &segment, sizes.len());
     let mut offsets = vec![Vec::new(); sizes.len()];
     for (i, &g) in segment.iter().enumerate() {
-        if start[i].is_finite() {
-            offsets[g].push(start[i] - centre[g]);
+        if let Some(&x) = start.get(i).filter(|x| x.is_finite()) {
+            offsets[g].push(x - centre[g]);
         }
     }
     let u0: Vec<f64> = offsets
@@ -637,12 +638,20 @@ fn spanning_tree_start(
     u
 }
 
-/// Start: the segment offsets on a grid of step `discrete_step` within the band, all at once,
-/// by TRW-S over the segment graph (each pairwise table is the segments' links summed at each
-/// offset difference). Coordinate descent moves one segment at a time and stops where moving
-/// any single one breaks more contacts than it makes, e.g. a box glued to the wall behind it
-/// that would have to move together with the piece of floor it stands on; the joint labelling
-/// sees such moves. The reference segment stays at 0.
+/// Offsets on each side of 0 in [`discrete_start`]'s grid at most: 2 · 32 + 1 labels keep its
+/// pairwise tables at 33 KB per segment pair whatever σ is.
+const MAX_HALF_GRID: f64 = 32.0;
+
+/// TRW-S passes of [`discrete_start`] (its MRF has tens of nodes; 30 passes converge).
+const DISCRETE_PASSES: usize = 30;
+
+/// Start: the segment offsets (log-scales, relative to the reference segment's) on a grid of
+/// step `step` (at least band / [`MAX_HALF_GRID`]) within ±`band`, all at once, by TRW-S over
+/// the segment graph (each pairwise table is the segments' links summed at each offset
+/// difference). Coordinate descent moves one segment at a time and stops where moving any
+/// single one breaks more contacts than it makes, e.g. a box glued to the wall behind it that
+/// would have to move together with the piece of floor it stands on; the joint labelling sees
+/// such moves. The reference segment stays at 0; all stay at 0 when the band has no room.
 fn discrete_start(
     problem: &Problem,
     segment: &[usize],
@@ -652,7 +661,12 @@ fn discrete_start(
     band: f64,
     step: f64,
 ) -> Vec<f64> {
-    let half = (band / step).ceil().max(1.0) as usize;
+    let step = step.max(band / MAX_HALF_GRID);
+    let half = (band / step).floor();
+    if half.is_nan() || half < 1.0 {
+        return vec![0.0; count];
+    }
+    let half = half as usize;
     let labels = 2 * half + 1;
     let offset = |l: usize| (l as f64 - half as f64) * step;
     // Ties go to the segment's centre (offset 0) by a vanishing preference.
@@ -689,7 +703,12 @@ fn discrete_start(
         }
         mrf.add_edge(g, h, table);
     }
-    let result = trws(&mrf, &TrwsOptions { iterations: 30 });
+    let result = trws(
+        &mrf,
+        &TrwsOptions {
+            iterations: DISCRETE_PASSES,
+        },
+    );
     result.labels.into_iter().map(offset).collect()
 }
 
@@ -896,7 +915,8 @@ pub fn pair_weight(
 /// How strongly the contacts pin each piece's scale, in [0, 1]: the piece's rigid segment is
 /// moved by ±25 % in scale as a whole, and the smaller rise of the contact energy across the
 /// segment's rim is divided by σ per touching neighbour, the rise if every contact on the rim
-/// were certain (weight 1) and broke. So a segment held only by weak evidence (contacts across
+/// were certain (weight 1) and broke (ground support weighs more, so a rim resting on the
+/// ground reaches 1 sooner; values are clamped to [0, 1]). So a segment held only by weak evidence (contacts across
 /// colour edges, flow jumps or failed flow checks: what an object in front of a wall looks like)
 /// scores low even where all of them break.
 /// 0: nothing ties the segment to the rest (a mover touching nothing, or touching only through

@@ -69,33 +69,43 @@ export async function takeTruth(files) {
   await scoreFiles(files);
 }
 
-/** Scores what was kept waiting (called once a run has finished). */
-export async function scorePending() {
-  const files = pending.splice(0);
+/**
+ * Scores what was kept waiting (called once a run has finished; `restored`: the run restoring
+ * the stored result, whose kept ground truth is scored too).
+ */
+export async function scorePending({ restored = false } = {}) {
+  const files = [...pending.splice(0), ...(restored ? restoredFiles : [])];
+  restoredFiles = [];
   if (files.length > 0) {
     await scoreFiles(files);
   }
 }
 
+/** Ground truth kept with a stored result, waiting for the run that restores it. */
+let restoredFiles = [];
+
 /**
- * Ground truth kept with a restored result (`saveTruth`'s record): scored again once the
- * restored run finishes, with the PNG scale it had.
+ * Ground truth kept with a restored result (`saveTruth`'s { depth, flow }): scored again once
+ * the run restoring that result finishes (and forgotten by any other run), with the PNG scale
+ * it had.
  */
 export function restoreTruth({ depth, flow }) {
+  restoredFiles = [];
   if (depth !== null) {
     if (depth.pngScale !== null) {
       $('truth-scale').value = String(depth.pngScale);
     }
-    pending.push(depth.file);
+    restoredFiles.push(depth.file);
   }
   if (flow !== null) {
-    pending.push(flow);
+    restoredFiles.push(flow);
   }
 }
 
 /** Forgets files kept waiting (the user started over). */
 export function dropPending() {
   pending.length = 0;
+  restoredFiles = [];
   lastPng = null;
 }
 

@@ -14,6 +14,8 @@ import { formIntrinsics } from './params.js';
 const DB_NAME = 'superpixel-soup';
 const STORE = 'session';
 const KEY = 'last';
+/** The ground truth scored against the stored result, kept apart (it comes later). */
+const TRUTH_KEY = 'truth';
 /** Bumped when the record's layout changes; older records are ignored. */
 const VERSION = 2;
 
@@ -62,6 +64,7 @@ function formValues() {
  */
 export async function saveSession(result) {
   document.body.dataset.saved = '';
+  page.savedAt = null;
   const frames = page.frames.map((frame) => ({
     name: frame.name,
     width: frame.width,
@@ -85,7 +88,11 @@ export async function saveSession(result) {
     },
   };
   try {
-    await withStore('readwrite', (store) => store.put(record, KEY));
+    await withStore('readwrite', (store) => {
+      store.delete(TRUTH_KEY); // scored against an earlier result
+      return store.put(record, KEY);
+    });
+    page.savedAt = record.savedAt;
     document.body.dataset.saved = 'yes';
   } catch (e) {
     // Private browsing or a full disk: the page works on without it.
@@ -97,20 +104,17 @@ export async function saveSession(result) {
 
 /**
  * Keeps the ground-truth files scored against the stored result (`truth`: groundtruth.js's
- * { depth, flow }) with it, so that a reload scores them again.
+ * { depth, flow }) beside it, stamped with the result's time, so that a reload scores them
+ * again; nothing when the result shown was not stored.
  */
 export async function saveTruth(truth) {
-  const record = await loadSession();
-  if (record === null) {
+  if (page.savedAt === null) {
     return;
   }
-  record.truth = truth;
   try {
-    await withStore('readwrite', (store) => store.put(record, KEY));
+    await withStore('readwrite', (store) => store.put({ savedAt: page.savedAt, truth }, TRUTH_KEY));
   } catch (e) {
     console.warn(`the ground truth could not be kept for a reload: ${e.message ?? e}`);
-  } finally {
-    freeArrays(...record.frames.map((frame) => frame.pixels.data));
   }
 }
 
@@ -118,7 +122,12 @@ export async function saveTruth(truth) {
 export async function loadSession() {
   try {
     const record = await withStore('readonly', (store) => store.get(KEY));
-    return record?.version === VERSION && record.frames?.length === 2 ? record : null;
+    if (record?.version !== VERSION || record.frames?.length !== 2) {
+      return null;
+    }
+    const kept = await withStore('readonly', (store) => store.get(TRUTH_KEY));
+    record.truth = kept?.savedAt === record.savedAt ? kept.truth : null;
+    return record;
   } catch {
     return null;
   }
@@ -127,8 +136,12 @@ export async function loadSession() {
 /** Forgets the stored result. */
 export async function clearSession() {
   document.body.dataset.saved = '';
+  page.savedAt = null;
   try {
-    await withStore('readwrite', (store) => store.delete(KEY));
+    await withStore('readwrite', (store) => {
+      store.delete(TRUTH_KEY);
+      return store.delete(KEY);
+    });
   } catch {
     // Nothing stored, or no IndexedDB: nothing to forget.
   }

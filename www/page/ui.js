@@ -29,6 +29,8 @@ export const page = {
   workingSize: null,
   /** Point count of the last result's (organised) cloud; the worker keeps the cloud itself. */
   points: 0,
+  /** `savedAt` of the stored result when it is the one shown (persist.js), else null. */
+  savedAt: null,
   /** Labels of the last result's superpixels whose scale no contact pins (report confidence). */
   unconfident: [],
   /** The 3D viewer in use (replaced after a lost GPU device or context), or null. */

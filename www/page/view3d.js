@@ -111,10 +111,20 @@ async function restore(what, { backend, camera }) {
     const viewer = await openViewer(fresh, backend);
     viewer.setFlagged(page.unconfident, $('unknown-scale').value);
     if (page.points > 0) {
-      const { cloud } = await page.pipeline.request('cloud', { soup: soupShown });
-      viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
-      freeCloud(cloud);
-      viewer.setCamera(camera);
+      // A new run or a cancel may end the wait for the cloud: then there is none to show
+      // yet, and the new result brings its own.
+      const reply = await page.pipeline.request('cloud', { soup: soupShown }).catch((e) => {
+        if (e instanceof CancelledError) {
+          return null;
+        }
+        throw e;
+      });
+      if (reply !== null) {
+        const { cloud } = reply;
+        viewer.setCloud(cloud.positions1, cloud.positions2, cloud.colours, cloud.labels);
+        freeCloud(cloud);
+        viewer.setCamera(camera);
+      }
     }
     viewer.setMorph(Number($('morph').value));
     viewer.setPointSize(Number($('point-size').value));

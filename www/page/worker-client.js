@@ -120,8 +120,11 @@ export async function run({ resizeSecond = false, restored = false } = {}) {
       kept.forEach((frame) => frame.close());
       return;
     }
-    page.pipeline.release(async () => ({ frames: kept, options }));
+    page.pipeline.release({ frames: kept, options });
     await showResult(result);
+    if (!current()) {
+      return; // another action (new photos, start over) came while the result was shown
+    }
     const finished = performance.now();
     page.lastRun = {
       // From the user's action (files picked, sample clicked, Reconstruct) to the result shown.
@@ -145,7 +148,7 @@ export async function run({ resizeSecond = false, restored = false } = {}) {
     await saveSession(result);
     freeArrays(...Object.values(result.pictures)); // drawn and kept: not needed any more
     if (current()) {
-      await scorePending();
+      await scorePending({ restored });
     }
     if (current()) {
       // Clouds, downloads and scores need the result in the worker: computed again now.

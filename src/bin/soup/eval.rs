@@ -328,8 +328,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     println!("| --- | --- | --- | --- |");
     // The scale energy over per-piece log-scales of the unit-scale soup's planes and motions.
     let problem = scales::build_problem(&rec.unit_soup, &inputs, &params.scales);
-    let mut scaled = rec.unit_soup.clone();
-    scales::solve_scales(&mut scaled, &inputs, &params.scales);
+    let scaled = &rec.scaled_soup;
     let solution: Vec<f64> = scaled.pieces.iter().map(|p| p.lambda.ln()).collect();
     let mut polished = oracle.clone();
     scales::polish(&problem, &mut polished, 50);
@@ -352,7 +351,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     }
     // The refinement energy over full states.
     if params.refine.iterations > 0 {
-        let refine_problem = refine::Problem::new(&scaled, &inputs, &params.scales, &params.refine);
+        let refine_problem = refine::Problem::new(scaled, &inputs, &params.scales, &params.refine);
         let mut truth = at(&oracle);
         let truth_energy = refine_problem.energy(&truth);
         let truth_mre = mre_of(&truth)?;
