@@ -14,6 +14,18 @@ fn soup(args: &[&str]) -> Output {
         .unwrap()
 }
 
+/// Runs `soup` with `args` and fails the test, showing its stderr, unless it succeeds.
+fn soup_ok(args: &[&str]) -> Output {
+    let out = soup(args);
+    assert!(
+        out.status.success(),
+        "soup {}: {}",
+        args.join(" "),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn temp_dir(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("soup-cli-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -22,7 +34,7 @@ fn temp_dir(name: &str) -> PathBuf {
 
 /// Renders `scene` at `size` ("WxH") with `soup synth` into `dir`; returns the case folder.
 fn synth_scene(dir: &std::path::Path, scene: &str, size: &str) -> PathBuf {
-    let out = soup(&[
+    soup_ok(&[
         "synth",
         dir.to_str().unwrap(),
         "--scene",
@@ -30,29 +42,19 @@ fn synth_scene(dir: &std::path::Path, scene: &str, size: &str) -> PathBuf {
         "--size",
         size,
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     dir.join(scene)
 }
 
 #[test]
 fn synth_writes_every_scene_in_the_case_layout() {
     let dir = temp_dir("synth");
-    let out = soup(&[
+    soup_ok(&[
         "synth",
         dir.to_str().unwrap(),
         "--size",
         "96x48",
         "--preview",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     for name in ["static-room", "street", "crowd", "flag"] {
         let case = read_case(&dir.join(name)).unwrap();
         assert_eq!(case.frame1.size(), (96, 48));
@@ -104,7 +106,7 @@ fn reconstruct_writes_the_documented_files() {
     let intrinsics = std::fs::read_to_string(case.join("intrinsics.txt")).unwrap();
     let result = dir.join("result");
     let path = |name: &str| case.join(name).to_str().unwrap().to_string();
-    let out = soup(&[
+    soup_ok(&[
         "reconstruct",
         &path("frame1.png"),
         &path("frame2.png"),
@@ -117,11 +119,6 @@ fn reconstruct_writes_the_documented_files() {
         "--out",
         result.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     for name in [
         "depth.pfm",
         "depth16.png",
@@ -143,7 +140,7 @@ fn reconstruct_writes_the_documented_files() {
     assert_eq!(report["camera"]["source"], "user");
     // Without a flow file the flow is computed; the report records its parameters.
     let computed = dir.join("computed");
-    let out = soup(&[
+    soup_ok(&[
         "reconstruct",
         &path("frame1.png"),
         &path("frame2.png"),
@@ -156,11 +153,6 @@ fn reconstruct_writes_the_documented_files() {
         "--out",
         computed.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(computed.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["flow"]["dis"]["finest_level"], 2);
@@ -189,7 +181,7 @@ fn flow_writes_both_fields_and_a_picture_and_scores_cases() {
     let case = synth_scene(&dir, "street", "192x96");
     let path = |name: &str| case.join(name).to_str().unwrap().to_string();
     let (forward, backward, viz) = (dir.join("f.flo"), dir.join("b.flo"), dir.join("f.png"));
-    let out = soup(&[
+    soup_ok(&[
         "flow",
         &path("frame1.png"),
         &path("frame2.png"),
@@ -200,11 +192,6 @@ fn flow_writes_both_fields_and_a_picture_and_scores_cases() {
         "--viz",
         viz.to_str().unwrap(),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let read_flo =
         |p: &PathBuf| superpixel_soup::formats::flo::decode(&std::fs::read(p).unwrap()).unwrap();
     assert_eq!(read_flo(&forward).size(), (192, 96));
@@ -213,8 +200,7 @@ fn flow_writes_both_fields_and_a_picture_and_scores_cases() {
     assert_eq!(picture.size(), (192, 96));
 
     // --eval prints one table row per case with its EPE.
-    let out = soup(&["flow", "--eval", case.to_str().unwrap(), "--preset", "fast"]);
-    assert!(out.status.success());
+    let out = soup_ok(&["flow", "--eval", case.to_str().unwrap(), "--preset", "fast"]);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let row = stdout
         .lines()
@@ -251,7 +237,7 @@ fn superpixels_writes_labels_and_pictures() {
     let dir = temp_dir("superpixels");
     let frame = synth_scene(&dir, "street", "128x64").join("frame1.png");
     let file = |name: &str| dir.join(name).to_str().unwrap().to_string();
-    let out = soup(&[
+    let out = soup_ok(&[
         "superpixels",
         frame.to_str().unwrap(),
         "--n",
@@ -265,11 +251,6 @@ fn superpixels_writes_labels_and_pictures() {
         "--mean",
         &file("mean.png"),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     assert!(String::from_utf8_lossy(&out.stdout).contains("superpixels (requested 40)"));
     let (labels, _) =
         superpixel_soup::formats::png16::decode(&std::fs::read(file("labels.png")).unwrap())
@@ -310,7 +291,7 @@ fn a_fresh_process_writes_the_same_files() {
     let path = |name: &str| case.join(name).to_str().unwrap().to_string();
     let run = |name: &str| {
         let result = dir.join(name);
-        let out = soup(&[
+        soup_ok(&[
             "reconstruct",
             &path("frame1.png"),
             &path("frame2.png"),
@@ -321,11 +302,6 @@ fn a_fresh_process_writes_the_same_files() {
             "--out",
             result.to_str().unwrap(),
         ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
         result
     };
     let (first, second) = (run("first"), run("second"));
@@ -360,8 +336,7 @@ fn a_fresh_process_writes_the_same_files() {
 fn help_shows_the_library_defaults() {
     // The defaults `--help` shows are the library's, not copies that could drift from it.
     let params = superpixel_soup::Params::default();
-    let out = soup(&["reconstruct", "--help"]);
-    assert!(out.status.success());
+    let out = soup_ok(&["reconstruct", "--help"]);
     let help = String::from_utf8_lossy(&out.stdout);
     let preset = superpixel_soup::flow::Preset::default();
     for (option, default) in [
@@ -443,7 +418,7 @@ fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
     let dir = temp_dir("truth-test");
     for scene in ["static-room", "street"] {
         let case = synth_scene(&dir, scene, "512x218");
-        let out = soup(&[
+        let out = soup_ok(&[
             "eval",
             case.to_str().unwrap(),
             "--gt-flow",
@@ -451,11 +426,6 @@ fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
             "600",
             "--oracle",
         ]);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
         let text = String::from_utf8_lossy(&out.stdout);
         let energy = |state: &str| -> f64 {
             let row = text
