@@ -189,38 +189,21 @@ impl PointPass {
         let points = view
             .shown_len()
             .min(self.textures.rows as usize * (TEXTURE_WIDTH / 2) as usize);
-        let points_per_upload = UPLOAD_ROWS * (TEXTURE_WIDTH / 2) as usize;
         let textures = &mut self.textures;
         if textures.positions_version != Some(view.positions_version()) {
-            let mut packed = Vec::with_capacity(2 * points_per_upload.min(points));
-            for first in (0..points).step_by(points_per_upload) {
-                packed.clear();
-                view.pack_positions(first, points_per_upload.min(points - first), &mut packed);
-                let row = 2 * first / TEXTURE_WIDTH as usize;
-                write_texels(
-                    queue,
-                    &textures.positions,
-                    bytemuck::cast_slice(&packed),
-                    16,
-                    row,
-                );
-            }
+            upload_points(
+                queue,
+                &textures.positions,
+                16,
+                points,
+                |first, count, out| view.pack_positions(first, count, out),
+            );
             textures.positions_version = Some(view.positions_version());
         }
         if textures.colours_version != Some(view.colours_version()) {
-            let mut packed = Vec::with_capacity(2 * points_per_upload.min(points));
-            for first in (0..points).step_by(points_per_upload) {
-                packed.clear();
-                view.pack_colours(first, points_per_upload.min(points - first), &mut packed);
-                let row = 2 * first / TEXTURE_WIDTH as usize;
-                write_texels(
-                    queue,
-                    &textures.colours,
-                    bytemuck::cast_slice(&packed),
-                    4,
-                    row,
-                );
-            }
+            upload_points(queue, &textures.colours, 4, points, |first, count, out| {
+                view.pack_colours(first, count, out)
+            });
             textures.colours_version = Some(view.colours_version());
         }
         self.count = u32::try_from(points).unwrap_or(u32::MAX);
@@ -364,6 +347,32 @@ impl PointTextures {
             positions_version: None,
             colours_version: None,
         }
+    }
+}
+
+/// Uploads the first `points` drawn points into `texture` (two texels of `texel_bytes` bytes
+/// per point), `UPLOAD_ROWS` rows at a time: `pack(first, count, out)` appends the texels of
+/// points `first..first + count` to `out`, so no packed copy of the whole cloud is ever held.
+fn upload_points<T: bytemuck::Pod>(
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    texel_bytes: usize,
+    points: usize,
+    pack: impl Fn(usize, usize, &mut Vec<T>),
+) {
+    let per_upload = UPLOAD_ROWS * (TEXTURE_WIDTH / 2) as usize;
+    let mut packed = Vec::with_capacity(2 * per_upload.min(points));
+    for first in (0..points).step_by(per_upload) {
+        packed.clear();
+        pack(first, per_upload.min(points - first), &mut packed);
+        let row = 2 * first / TEXTURE_WIDTH as usize;
+        write_texels(
+            queue,
+            texture,
+            bytemuck::cast_slice(&packed),
+            texel_bytes,
+            row,
+        );
     }
 }
 
