@@ -226,6 +226,53 @@ fn computed_flow_flag_and_street_beat_a_constant_depth() {
 }
 
 #[test]
+fn flow_is_computed_again_finer_while_too_little_passes_its_check() {
+    use superpixel_soup::flow::{FlowParams, Preset};
+    let s = render(SceneKind::StaticRoom, 256, 110).unwrap();
+    let pair = pair_of(&s.frame1, &s.frame2, s.intrinsics);
+    let fast = FlowParams::preset(Preset::Fast);
+    let run = |min_reliable_flow| {
+        let params = Params {
+            superpixels: superpixel_soup::superpixels::SlicParams {
+                count: 100,
+                ..Default::default()
+            },
+            min_reliable_flow,
+            ..Params::default()
+        };
+        reconstruct(&pair, FlowInput::Compute(fast), &params, &mut |_, _| {}).unwrap()
+    };
+    // Nothing is ever trusted enough at 1.0: fast, then medium, then high (the last preset).
+    let always = run(1.0);
+    assert_eq!(always.report.notes.len(), 2, "{:?}", always.report.notes);
+    assert!(always.report.notes[1].contains("preset medium; computed again with preset high"));
+    let used = always.report.flow.unwrap().preset_name();
+    let shares: Vec<f64> = [Preset::Fast, Preset::Medium, Preset::High]
+        .into_iter()
+        .map(|p| {
+            let f = superpixel_soup::flow::compute_flow(
+                &pair.frame1,
+                &pair.frame2,
+                &FlowParams::preset(p),
+                &mut |_| {},
+            )
+            .unwrap();
+            f.reliable.data().iter().filter(|&&r| r).count() as f64 / f.reliable.len() as f64
+        })
+        .collect();
+    // The pass with the most trusted pixels is the one kept.
+    let best = (0..3)
+        .max_by(|&a, &b| shares[a].total_cmp(&shares[b]))
+        .unwrap();
+    assert_eq!(used, Some(Preset::ALL[best].name()));
+    assert!((always.report.reliable_flow - shares[best]).abs() < 1e-12);
+    // At 0 the given preset is kept.
+    let never = run(0.0);
+    assert!(never.report.notes.is_empty());
+    assert_eq!(never.report.flow, Some(fast));
+}
+
+#[test]
 fn identical_frames_and_pure_rotation_have_no_parallax() {
     let s = render(SceneKind::StaticRoom, 256, 110).unwrap();
     let params = Params {

@@ -107,6 +107,28 @@ impl FlowParams {
         }
         Ok(())
     }
+
+    /// The next finer preset (fast → medium → high) with this forward–backward tolerance, when
+    /// the DIS parameters are those of a preset other than `high`; `None` otherwise (custom
+    /// parameters are kept as given).
+    pub fn finer(&self) -> Option<FlowParams> {
+        let at = Preset::ALL
+            .iter()
+            .position(|&p| DisParams::preset(p) == self.dis)?;
+        let next = *Preset::ALL.get(at + 1)?;
+        Some(FlowParams {
+            dis: DisParams::preset(next),
+            ..*self
+        })
+    }
+
+    /// The preset whose DIS parameters these are, if any.
+    pub fn preset_name(&self) -> Option<&'static str> {
+        Preset::ALL
+            .into_iter()
+            .find(|&p| DisParams::preset(p) == self.dis)
+            .map(Preset::name)
+    }
 }
 
 impl Default for FlowParams {
@@ -185,6 +207,29 @@ pub fn compute_flow(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn finer_presets_chain_up_to_high_and_keep_the_tolerance() {
+        let fast = FlowParams {
+            fb_threshold: 0.7,
+            ..FlowParams::preset(Preset::Fast)
+        };
+        let medium = fast.finer().unwrap();
+        assert_eq!(medium.dis, DisParams::preset(Preset::Medium));
+        assert_eq!(medium.fb_threshold, 0.7);
+        let high = medium.finer().unwrap();
+        assert_eq!(high.preset_name(), Some("high"));
+        assert_eq!(high.finer(), None);
+        let custom = FlowParams {
+            dis: DisParams {
+                iterations: 3,
+                ..DisParams::preset(Preset::Fast)
+            },
+            ..fast
+        };
+        assert_eq!(custom.finer(), None);
+        assert_eq!(custom.preset_name(), None);
+    }
 
     #[test]
     fn resizing_scales_vectors_and_keeps_unknowns() {
