@@ -244,7 +244,7 @@ impl Fitting<'_> {
         (CAP_PX - self.deadband) as f32
     }
 
-    /// Estimates the noise floor from the hypotheses so far: twice the 30th percentile of each
+    /// Estimates the noise floor from the hypotheses so far: twice the 10th percentile of each
     /// superpixel's best cost (the well-explained superpixels' residual), at most 1 px. Costs
     /// are then re-evaluated with it as their deadband.
     fn set_noise(&mut self) {
