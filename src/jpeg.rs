@@ -11,8 +11,8 @@
 //!
 //! Colours are the file's YCbCr turned into RGB without colour management (the ICC profile is
 //! ignored), as the page's `colorSpaceConversion: 'none'`. The decoder refuses what it does not
-//! support (CMYK and YCCK, arithmetic coding, 12- and 16-bit samples, hierarchical files) with
-//! [`Error::Decode`]; the page then lets the browser decode the file as before.
+//! support (CMYK and YCCK, arithmetic coding, 12- and 16-bit samples, lossless and hierarchical
+//! files) with [`Error::Decode`]; the page then lets the browser decode the file as before.
 
 use crate::error::{Error, Result};
 use crate::image::{
@@ -78,6 +78,12 @@ pub fn decode_jpeg_scaled(bytes: &[u8], max_side: usize) -> Result<ScaledJpeg> {
     let info = decoder
         .info()
         .ok_or_else(|| Error::Decode("JPEG without a frame header".to_string()))?;
+    if info.coding_process == jpeg_decoder::CodingProcess::Lossless {
+        // No DCT to scale: left to the browser, as before.
+        return Err(Error::Decode(
+            "lossless JPEGs are not supported by the scaled decoder".to_string(),
+        ));
+    }
     let channels = match info.pixel_format {
         jpeg_decoder::PixelFormat::RGB24 => 3,
         jpeg_decoder::PixelFormat::L8 => 1,
