@@ -12,16 +12,20 @@
 //   size (long side 1024);
 // - 6000×4000 (24 megapixels): the street rendered at 1500×1000, upscaled 4× the same way.
 // `--no-loading` skips the page-load rows (the memory and end-to-end rows only).
-// Each run uses a fresh browser. Times are the minimum over runs; memory is the largest peak
-// resident size (VmHWM) of the renderer process, the tab with its worker (the GPU process, which
-// rasterises with SwiftShader here, is apart), over runs.
+// Each run uses a fresh browser. The photos are picked as files on disk, as a person picks them
+// (Playwright given buffers instead passes them through the page's JavaScript heap as base64:
+// about 100 MiB of garbage in the renderer for the 24 MP pair). Times are the minimum over runs;
+// memory is the largest peak resident size of the renderer process, the tab with its workers
+// (the GPU process, which rasterises with SwiftShader here, is apart), over runs: the larger of
+// its VmHWM at the end and its VmRSS sampled every 20 ms during the run (VmHWM alone missed a
+// 200 MiB spike of the browser's photo decoding).
 // Loading: a fresh browser (empty cache) opens the page on localhost and on an emulated
 // 10 Mbit/s line, with the worker on the lean module (the default) and on the full one
 // (`?worker=full`); "ready" is the page usable (the worker's module loaded), "viewer" the 3D view
 // created (the full module, loaded after the worker's); a cancel's worker restart is timed too.
 
 import { spawnSync } from 'node:child_process';
-import { mkdtempSync, readFileSync, rmSync, statSync } from 'node:fs';
+import { mkdirSync, mkdtempSync, readFileSync, rmSync, statSync, writeFileSync } from 'node:fs';
 import { gzipSync } from 'node:zlib';
 import { tmpdir } from 'node:os';
 import path from 'node:path';
@@ -50,17 +54,21 @@ const png = (dir, name) => readFileSync(path.join(work, dir, 'street', name));
 
 const server = await startServer();
 
-/** Peak and current resident memory (MiB) of the browser's renderer processes. */
-async function rendererMemory(browser) {
+/** The process ids of the browser's renderer processes. */
+async function rendererPids(browser) {
   const cdp = await browser.newBrowserCDPSession();
   const { processInfo } = await cdp.send('SystemInfo.getProcessInfo');
   await cdp.detach();
-  const kib = (pid, key) => {
+  return processInfo.filter((p) => p.type === 'renderer').map((p) => p.id);
+}
+
+/** The largest `key` (VmHWM, VmRSS) of processes `pids`, in MiB. */
+function largest(pids, key) {
+  const kib = (pid) => {
     const status = readFileSync(`/proc/${pid}/status`, 'utf8');
     return Number(status.match(new RegExp(`^${key}:\\s+(\\d+) kB`, 'm'))[1]);
   };
-  const renderers = processInfo.filter((p) => p.type === 'renderer');
-  return Math.max(...renderers.map((p) => kib(p.id, 'VmHWM'))) / 1024;
+  return Math.max(...pids.map(kib)) / 1024;
 }
 
 /** JPEGs of `pngs` scaled to `width × height` in the page (browser image scaling). */
@@ -90,14 +98,27 @@ async function upscaleToJpeg(page, pngs, width, height) {
   return out;
 }
 
-/** One end-to-end run of `files` in a fresh browser: { ms, stages, memory, workingSize }. */
+/**
+ * One end-to-end run of `files` (paths) in a fresh browser: { ms, stages, wasmMemory, memory,
+ * workingSize }.
+ */
 async function endToEnd(files) {
   const browser = await launchBrowser();
+  let sampling = true;
+  let sampler = Promise.resolve();
   try {
     const page = await browser.newPage({ viewport: { width: 1100, height: 900 } });
     await page.goto(server.url);
     await page.waitForFunction(() => document.body.dataset.state === 'idle', null, { timeout: 120_000 });
     await page.evaluate(() => window.soupPage.viewerReady);
+    const pids = await rendererPids(browser);
+    let sampled = 0;
+    sampler = (async () => {
+      while (sampling) {
+        sampled = Math.max(sampled, largest(pids, 'VmRSS'));
+        await new Promise((resolve) => setTimeout(resolve, 20));
+      }
+    })();
     await page.setInputFiles('#file-input', files);
     await page.waitForFunction(() => ['done', 'error'].includes(document.body.dataset.state), null, {
       timeout: 600_000,
@@ -106,18 +127,24 @@ async function endToEnd(files) {
       throw new Error(await page.textContent('[role="alert"]'));
     }
     const run = await page.evaluate(() => window.soupPage.lastRun);
+    // The report comes from the result computed again in the background (www/pipeline.js): the
+    // memory is read once that is done too.
     const report = JSON.parse(await page.evaluate(async () => {
       const { bytes } = await window.soupPage.pipeline.request('export', { name: 'report.json' });
       return new TextDecoder().decode(bytes);
     }));
+    sampling = false;
+    await sampler;
     return {
       ms: run.endToEndMs,
       stages: Object.values(run.stagesMs).reduce((a, b) => a + b, 0),
       wasmMemory: run.memoryBytes / 2 ** 20,
-      memory: await rendererMemory(browser),
+      memory: Math.max(largest(pids, 'VmHWM'), sampled),
       workingSize: report.working_size.join('×'),
     };
   } finally {
+    sampling = false;
+    await sampler.catch(() => {});
     await browser.close();
   }
 }
@@ -168,7 +195,7 @@ const max = (xs) => Math.max(...xs);
 const rows = [];
 try {
   const cases = [
-    ['1024×436 PNG pair (street)', ['frame1.png', 'frame2.png'].map((name) => ({ name, mimeType: 'image/png', buffer: png('small', name) }))],
+    ['1024×436 PNG pair (street)', ['frame1.png', 'frame2.png'].map((name) => path.join(work, 'small', 'street', name))],
   ];
   {
     const browser = await launchBrowser();
@@ -176,9 +203,15 @@ try {
     await page.goto(`${server.url}www/favicon.svg`);
     for (const [dir, width, height, label] of [['photo', 4032, 3024, '12 MP'], ['photo24', 6000, 4000, '24 MP']]) {
       const jpegs = await upscaleToJpeg(page, [png(dir, 'frame1.png'), png(dir, 'frame2.png')], width, height);
+      mkdirSync(path.join(work, `${dir}-jpeg`));
+      const files = jpegs.map((buffer, i) => {
+        const file = path.join(work, `${dir}-jpeg`, `photo${i + 1}.jpg`);
+        writeFileSync(file, buffer);
+        return file;
+      });
       cases.push([
         `${width}×${height} JPEG pair (${label}, street upscaled; ${(jpegs[0].length / 2 ** 20).toFixed(1)} MB each)`,
-        jpegs.map((buffer, i) => ({ name: `photo${i + 1}.jpg`, mimeType: 'image/jpeg', buffer })),
+        files,
       ]);
     }
     await browser.close();
@@ -211,7 +244,7 @@ try {
     }
   }
   console.log(`\nThe page end to end in headless Chromium, default parameters, minimum of ${runs} runs (fresh browser each)\n`);
-  console.log('| input | working size | end to end (pick → result shown) | pipeline stages in wasm | peak tab memory (renderer VmHWM) | worker wasm memory |');
+  console.log('| input | working size | end to end (pick → result shown) | pipeline stages in wasm | peak tab memory (renderer, VmHWM or sampled VmRSS) | worker wasm memory |');
   console.log('| --- | --- | --- | --- | --- | --- |');
   console.log(rows.join('\n'));
   if (loadRows.length > 0) {

@@ -47,9 +47,7 @@ pub fn decode_image(bytes: &[u8]) -> Result<LoadedImage> {
         .map_err(|e| Error::Decode(e.to_string()))?;
     let (orientation, exif) = read_exif(bytes);
     let rgb = apply_orientation(decoded, orientation).to_rgb8();
-    let (width, height) = (rgb.width() as usize, rgb.height() as usize);
-    let pixels = rgb.pixels().map(|p| p.0).collect();
-    let frame = Grid::from_vec(width, height, pixels)?;
+    let frame = frame_from_rgb_image(&rgb)?;
     Ok(LoadedImage { frame, exif })
 }
 
@@ -92,7 +90,7 @@ pub fn frame_from_rgba(rgba: &[u8], width: usize, height: usize) -> Result<Frame
 
 /// Fails unless the JPEG's marker structure runs from SOI to EOI. The decoder itself fills a
 /// truncated scan with grey instead of failing, which would hand garbage pixels to the pipeline.
-fn check_jpeg_complete(bytes: &[u8]) -> Result<()> {
+pub(crate) fn check_jpeg_complete(bytes: &[u8]) -> Result<()> {
     let truncated = || Error::Decode("truncated JPEG (no end-of-image marker)".to_string());
     let mut i = 2; // after SOI
     loop {
@@ -130,7 +128,7 @@ fn check_jpeg_complete(bytes: &[u8]) -> Result<()> {
 }
 
 /// EXIF orientation (1–8, 1 = upright) and focal length. Never fails: problems land in the warning.
-fn read_exif(bytes: &[u8]) -> (u32, ExifInfo) {
+pub(crate) fn read_exif(bytes: &[u8]) -> (u32, ExifInfo) {
     let mut cursor = std::io::Cursor::new(bytes);
     let exif = match exif::Reader::new().read_from_container(&mut cursor) {
         Ok(exif) => exif,
@@ -167,7 +165,7 @@ fn read_exif(bytes: &[u8]) -> (u32, ExifInfo) {
 }
 
 /// Turns an image upright for EXIF orientation `o` (1 = as stored).
-fn apply_orientation(img: image::DynamicImage, o: u32) -> image::DynamicImage {
+pub(crate) fn apply_orientation(img: image::DynamicImage, o: u32) -> image::DynamicImage {
     match o {
         2 => img.fliph(),
         3 => img.rotate180(),
@@ -225,13 +223,29 @@ pub fn resize(frame: &Frame, width: usize, height: usize) -> Frame {
         // from_raw only fails when the buffer is too short, which a Grid rules out.
         return frame.clone();
     };
-    let out = image::imageops::resize(
-        &buffer,
+    let out = resize_rgb(buffer, width, height);
+    Grid::from_fn(width, height, |x, y| out.get_pixel(x as u32, y as u32).0)
+}
+
+/// [`resize`] of an `image` crate RGB buffer (the same filter), given back as it is when it
+/// already has the size.
+pub(crate) fn resize_rgb(img: image::RgbImage, width: usize, height: usize) -> image::RgbImage {
+    if (img.width() as usize, img.height() as usize) == (width, height) {
+        return img;
+    }
+    image::imageops::resize(
+        &img,
         width as u32,
         height as u32,
         image::imageops::FilterType::Triangle,
-    );
-    Grid::from_fn(width, height, |x, y| out.get_pixel(x as u32, y as u32).0)
+    )
+}
+
+/// A frame of an `image` crate RGB buffer (a copy). Errors only when the buffer is shorter than
+/// its size says, which the `image` crate rules out.
+pub(crate) fn frame_from_rgb_image(img: &image::RgbImage) -> Result<Frame> {
+    let pixels = img.pixels().map(|p| p.0).collect();
+    Grid::from_vec(img.width() as usize, img.height() as usize, pixels)
 }
 
 /// Luma in [0, 1] (Rec. 601 weights on the gamma-encoded values, as OpenCV's grey conversion).

@@ -2,8 +2,9 @@
 //! (Kumar, Dai, Li, ICCV 2017), for the command line and the browser.
 //!
 //! Data flows one way through plain functions, one module per stage:
-//! frames ([`image`], [`input`], [`camera`]) → flow ([`flow`]) → superpixels and graphs
-//! ([`superpixels`]) → unit-scale soup → scaled soup ([`soup`]) → outputs ([`output`]);
+//! frames ([`image`], [`input`], [`camera`]; [`jpeg`] decodes the page's JPEG photos straight to
+//! the working size) → flow ([`flow`]) → superpixels and graphs ([`superpixels`]) → unit-scale
+//! soup → scaled soup ([`soup`]) → outputs ([`output`]);
 //! [`pipeline::reconstruct`] runs them all. [`formats`] reads and writes the files, [`export`]
 //! encodes a reconstruction's output files, [`eval`] scores results, [`synth`] renders scenes
 //! with exact ground truth. At the edge: [`render`], the 3D viewer, and `web` (wasm only), the
@@ -23,6 +24,7 @@ pub mod geometry;
 pub mod grid;
 pub mod image;
 pub mod input;
+pub mod jpeg;
 pub mod mrf;
 pub mod output;
 pub mod pipeline;

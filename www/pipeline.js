@@ -44,14 +44,19 @@ export class Pipeline {
     this.start();
   }
 
-  /** Starts a worker; `this.ready` resolves once its wasm module is loaded. */
-  start() {
-    const started = performance.now();
+  /** The URL of the worker script with this pipeline's module. */
+  workerUrl() {
     const url = new URL('./worker.js', import.meta.url);
     if (this.module !== 'lean') {
       url.searchParams.set('module', this.module);
     }
-    const worker = new Worker(url, { type: 'module' });
+    return url;
+  }
+
+  /** Starts a worker; `this.ready` resolves once its wasm module is loaded. */
+  start() {
+    const started = performance.now();
+    const worker = new Worker(this.workerUrl(), { type: 'module' });
     this.worker = worker;
     this.ready = new Promise((resolve, reject) => {
       worker.onmessage = ({ data }) => {
@@ -151,6 +156,37 @@ export class Pipeline {
   release(inputs) {
     this.restart();
     this.inputs = inputs;
+  }
+
+  /**
+   * Decodes a JPEG photo (`bytes`, an ArrayBuffer, transferred) upright at the working size for
+   * `maxSide` (www/worker.js `decode-jpeg`) in a worker of its own, started for it and
+   * terminated once it replied: the decoder's wasm memory goes back at once, and the pipeline's
+   * worker (which may be computing a released result again) neither waits for the decode nor
+   * keeps its memory. Resolves to { width, height, frameWidth, frameHeight, pixels, exif };
+   * rejects when the decoder refuses the file (the page then lets the browser decode it).
+   */
+  async decodeJpeg(bytes, maxSide) {
+    const worker = new Worker(this.workerUrl(), { type: 'module' });
+    try {
+      return await new Promise((resolve, reject) => {
+        worker.onmessage = ({ data }) => {
+          if (data.type === 'ready') {
+            worker.postMessage({ type: 'decode-jpeg', id: 0, bytes, maxSide }, [bytes]);
+          } else if (data.type === 'reply') {
+            resolve(data);
+          } else if (data.type === 'error' || data.type === 'failed') {
+            reject(new Error(data.message));
+          }
+        };
+        worker.onerror = (event) => {
+          event.preventDefault();
+          reject(new Error(`the decoding worker failed: ${event.message || 'script error'}`));
+        };
+      });
+    } finally {
+      worker.terminate();
+    }
   }
 
   /**

@@ -6,6 +6,10 @@
 //
 // Requests (each with an `id`; answered by { type: 'reply', id, ... } or { type: 'error', id, ... }):
 //   { type: 'exif', bytes: ArrayBuffer }                   → { exif: { focal35mm, warning } }
+//   { type: 'decode-jpeg', bytes: ArrayBuffer, maxSide }   → { width, height (the photo,
+//       upright), frameWidth, frameHeight, pixels: RGBA at the working size, exif } (a DCT-scaled
+//       decode, src/jpeg.rs; an error when the decoder refuses the file; www/pipeline.js sends it
+//       to a worker of its own)
 //   { type: 'intrinsics', width, height, focal35mm }        → { camera: { intrinsics, source } }
 //   { type: 'run', frames: [ImageBitmap, ImageBitmap], options, quiet }
 //       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below);
@@ -109,6 +113,19 @@ function handle(message) {
   switch (message.type) {
     case 'exif':
       return [{ exif: JSON.parse(soup.readExif(new Uint8Array(message.bytes))) }];
+    case 'decode-jpeg': {
+      const decoded = soup.decodeJpeg(new Uint8Array(message.bytes), message.maxSide);
+      const reply = {
+        width: decoded.width,
+        height: decoded.height,
+        frameWidth: decoded.frameWidth,
+        frameHeight: decoded.frameHeight,
+        exif: JSON.parse(decoded.exif),
+        pixels: decoded.takePixels(),
+      };
+      decoded.free();
+      return [reply, [reply.pixels.buffer]];
+    }
     case 'intrinsics':
       return [{ camera: JSON.parse(soup.resolveIntrinsics(message.width, message.height, message.focal35mm ?? undefined)) }];
     case 'run':

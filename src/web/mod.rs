@@ -7,6 +7,7 @@
 //! - this file: `version`, `decodeImageInfo`
 //! - [`reconstruct`]: the pipeline for the page's Web Worker (`reconstruct`, `readExif`,
 //!   `resolveIntrinsics`, `pageDefaults`) and the result's pictures, clouds and export files
+//! - [`decode`]: JPEG photos decoded straight to the working size in the worker (`decodeJpeg`)
 //! - [`ground_truth`]: scores of the result against the user's ground truth (`scoreDepth`,
 //!   `scoreFlow`, `errorPicture`)
 //! - [`memory`]: out-of-memory reporting (`failedAllocation`, `memoryBytes`)
@@ -19,6 +20,7 @@ use wasm_bindgen::prelude::*;
 
 use crate::image::Frame;
 
+pub mod decode;
 mod flow;
 pub mod ground_truth;
 pub mod memory;

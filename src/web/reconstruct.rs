@@ -246,7 +246,7 @@ pub fn reconstruct(
         let (ww, wh) = pair.frame1.size();
         pair.notes.retain(|n| !n.starts_with("downscaled from"));
         pair.notes.push(format!(
-            "downscaled from {w}×{h} to {ww}×{wh} (by the browser, as it decoded the photos)"
+            "downscaled from {w}×{h} to {ww}×{wh} (as the page decoded the photos)"
         ));
     }
     let mut report = |stage: Stage, fraction: f32| {

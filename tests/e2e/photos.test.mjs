@@ -1,8 +1,8 @@
 // End-to-end test of phone-sized photos: a 12-megapixel JPEG pair (4032 × 3024, the sample
 // upscaled in the browser) runs through the page. The page decodes each photo straight to the
-// working size (the worker never gets the full-size pixels); the report still tells the photos'
-// size, and the depth download is at that size. Peak memory is measured by benches/page.mjs,
-// not here.
+// working size (the library's DCT-scaled JPEG decoder, in a worker; no full-size pixels are ever
+// made); the report still tells the photos' size, and the depth download is at that size. Peak
+// memory is measured by benches/page.mjs, not here.
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -24,8 +24,10 @@ test('a 12-megapixel JPEG pair runs at the working size, with outputs at the pho
   const summary = await page.textContent('#summary');
   assert.match(summary, /Input size4032 × 3024/);
   assert.match(summary, /Working size1024 × 768/);
-  assert.match(summary, /downscaled from 4032×3024 to 1024×768 \(by the browser/);
-  // The frames reached the worker at the working size: its pixel buffers are small.
+  assert.match(summary, /downscaled from 4032×3024 to 1024×768 \(as the page decoded/);
+  // The library decoded the photos straight to the working size (src/jpeg.rs), and the frames
+  // reached the worker at that size: its pixel buffers are small.
+  assert.deepEqual(await page.evaluate(() => window.soupPage.frames.map((f) => f.decoder)), ['library', 'library']);
   assert.deepEqual(await page.evaluate(() => window.soupPage.frames.map((f) => [f.bitmap.width, f.bitmap.height])), [[1024, 768], [1024, 768]]);
   // Default intrinsics of the photo (f = long side), at the working size in the report.
   const report = JSON.parse(await download(page, 'report.json'));

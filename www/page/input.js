@@ -1,8 +1,8 @@
 // Input: dropped or picked files, the sample, videos (a scrubber to pick two frames), decoding
-// with the browser and the frames' thumbnails. Every action here ends in a run (worker-client.js)
-// or a message.
+// (JPEGs by the library in a worker, other images by the browser) and the frames' thumbnails.
+// Every action here ends in a run (worker-client.js) or a message.
 
-import { $, begin, clearAlert, fail, page, setState, setStatus, waitFor } from './ui.js';
+import { $, begin, clearAlert, fail, freeArrays, page, setState, setStatus, waitFor } from './ui.js';
 import { INTRINSIC_FIELDS, fillForm, refreshIntrinsics, setIntrinsics } from './params.js';
 import { cancel, resetProgress, run } from './worker-client.js';
 import { dropPending, isTruthFile, resetTruth, restoreTruth, takeTruth } from './groundtruth.js';
@@ -97,20 +97,69 @@ export async function takeFiles(fileList) {
   }
 }
 
-/** Decodes an image file with the browser and reads its EXIF block with the library. */
+/**
+ * Decodes an image file at the working size (`decodeFile`) with its EXIF facts, read by the
+ * library.
+ */
 export async function decodeImage(file) {
-  let bitmap;
-  let size;
+  const decoded = await decodeFile(file, maxSide());
+  let { exif } = decoded;
+  if (exif === null) {
+    const bytes = await file.arrayBuffer();
+    ({ exif } = await page.pipeline.request('exif', { bytes }, [bytes]));
+  }
+  return makeFrame(file.name, decoded.bitmap, file, exif, decoded.size, decoded.decoder);
+}
+
+/**
+ * Decodes `file` upright at the working size for `side` (long side): a JPEG by the library's
+ * DCT-scaled decoder in a worker of its own (src/jpeg.rs; no full-size image of the photo is
+ * ever made), anything else, and a JPEG that decoder refuses (CMYK, arithmetic coding, damaged),
+ * by the browser. Resolves to { bitmap, size: the photo's upright [width, height], exif (null
+ * when not read yet), decoder: 'library' | 'browser' }.
+ */
+async function decodeFile(file, side) {
+  if (await isJpeg(file)) {
+    const decoded = await decodeJpeg(file, side);
+    if (decoded !== null) {
+      return decoded;
+    }
+  }
   try {
-    size = await imageSize(file);
-    bitmap = await decodeAt(file, size, maxSide());
+    const size = await imageSize(file);
+    return { bitmap: await decodeAt(file, size, side), size, exif: null, decoder: 'browser' };
   } catch {
     throw new Error(`${file.name} could not be decoded: the file is damaged or in a format this ` +
       'browser cannot read.');
   }
-  const bytes = await file.arrayBuffer();
-  const { exif } = await page.pipeline.request('exif', { bytes }, [bytes]);
-  return makeFrame(file.name, bitmap, file, exif, size);
+}
+
+/** Whether `file` starts as a JPEG does (SOI, then another marker), whatever its name or type. */
+async function isJpeg(file) {
+  const head = new Uint8Array(await file.slice(0, 3).arrayBuffer());
+  return head.length === 3 && head[0] === 0xff && head[1] === 0xd8 && head[2] === 0xff;
+}
+
+/**
+ * `decodeFile` of a JPEG by the library (www/pipeline.js `decodeJpeg`), or null when the
+ * decoder refuses it (the browser then decodes it).
+ */
+async function decodeJpeg(file, side) {
+  let reply;
+  try {
+    reply = await page.pipeline.decodeJpeg(await file.arrayBuffer(), side);
+  } catch (e) {
+    console.info(`${file.name}: decoded by the browser (the library's JPEG decoder: ${e.message})`);
+    return null;
+  }
+  const { pixels, frameWidth, frameHeight, width, height, exif } = reply;
+  try {
+    const image = new ImageData(new Uint8ClampedArray(pixels.buffer), frameWidth, frameHeight);
+    const bitmap = await createImageBitmap(image, { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
+    return { bitmap, size: [width, height], exif, decoder: 'library' };
+  } finally {
+    freeArrays(pixels);
+  }
 }
 
 /**
@@ -127,7 +176,7 @@ function imageSize(file) {
   }).finally(() => URL.revokeObjectURL(url));
 }
 
-/** Decodes `file` (upright size `size`) straight to the working size for `side`. */
+/** Decodes `file` (upright size `size`) straight to the working size for `side`, by the browser. */
 function decodeAt(file, [width, height], side) {
   const [w, h] = workingSize(width, height, side);
   if (w === width && h === height) {
@@ -187,9 +236,9 @@ async function shrink(full, side) {
  * A frame of `full` (the decoded pixels of `source`, or a video frame when `source` is null;
  * closed here unless already at the working size) whose own size is `width × height`: a
  * thumbnail and its pixels at the working size (`bitmap`, for `side`, the long side it was made
- * for).
+ * for); `decoder` tells who decoded it ('library', 'browser', or null for a video frame).
  */
-async function makeFrame(name, full, source, exif, [width, height] = [full.width, full.height]) {
+async function makeFrame(name, full, source, exif, [width, height] = [full.width, full.height], decoder = null) {
   const side = maxSide();
   const bitmap = await shrink(full, side);
   const scale = Math.min(1, THUMBNAIL / Math.max(bitmap.width, bitmap.height));
@@ -198,7 +247,7 @@ async function makeFrame(name, full, source, exif, [width, height] = [full.width
     resizeHeight: Math.max(1, Math.round(bitmap.height * scale)),
     resizeQuality: 'medium',
   });
-  return { name, width, height, exif, thumbnail, source, bitmap, side };
+  return { name, width, height, exif, thumbnail, source, bitmap, side, decoder };
 }
 
 /**
@@ -210,7 +259,7 @@ export async function pixelsForRun(frame) {
   if (frame.side !== side && frame.source !== null) {
     const [w, h] = workingSize(frame.width, frame.height, side);
     if (w !== frame.bitmap.width || h !== frame.bitmap.height) {
-      const bitmap = await decodeAt(frame.source, [frame.width, frame.height], side);
+      const { bitmap } = await decodeFile(frame.source, side);
       frame.bitmap.close();
       frame.bitmap = bitmap;
     }

@@ -71,6 +71,7 @@ export async function saveSession(result) {
     height: frame.height,
     exif: frame.exif,
     side: frame.side,
+    decoder: frame.decoder,
     pixels: pixelsOf(frame.bitmap),
   }));
   const record = {
@@ -169,6 +170,7 @@ export async function framesOf(record, thumbnailSide) {
       source: null,
       bitmap,
       side: stored.side,
+      decoder: stored.decoder ?? null,
     };
   }));
 }

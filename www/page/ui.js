@@ -17,10 +17,11 @@ export const page = {
   /** Defaults and names from the library (`pageDefaults`), once the worker is ready. */
   defaults: null,
   /**
-   * The two frames: { name, width, height, exif: { focal35mm, warning }, thumbnail (a small
-   * ImageBitmap), and the pixels: `source` (the file, decoded again for each run) and/or
-   * `bitmap` (decoded pixels: a video frame's, or a photo's until its first run takes them) }.
-   * Large photos are not kept decoded: 12 megapixels are 48 MB each.
+   * The two frames: { name, width, height (the photo's, upright), exif: { focal35mm, warning },
+   * thumbnail (a small ImageBitmap), `source` (the file, decoded again when the working size
+   * changes; null for a video frame), `bitmap` (the pixels at the working size for `side`, its
+   * long side) and `decoder` ('library' for a JPEG decoded by src/jpeg.rs, 'browser', or null
+   * for a video frame) }. Photos are never kept at full size: 12 megapixels are 48 MB of RGBA.
    */
   frames: [],
   /** "auto": intrinsics from EXIF or the default (resolved by the library); "user": the form's. */
