@@ -6,7 +6,9 @@ use serde::Serialize;
 
 use crate::camera::Camera;
 use crate::error::{Error, Result};
-use crate::flow::{FlowField, FlowPair, FlowParams, compute_flow, is_known, resize_flow};
+use crate::flow::{
+    FlowField, FlowPair, FlowParams, Preset, compute_flow, is_known, resize_flow, trusted_share,
+};
 use crate::grid::Grid;
 use crate::image::Frame;
 use crate::input::FramePair;
@@ -55,7 +57,8 @@ impl Stage {
 }
 
 /// Every tunable of the pipeline with its default (each documented on its own type). Fields
-/// missing from a deserialised value keep their defaults (parameters saved by an older version).
+/// missing from a deserialised value keep their defaults (parameters saved by an older version;
+/// only at this level: a nested object given in part does not deserialise).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct Params {
@@ -65,12 +68,13 @@ pub struct Params {
     pub init: InitParams,
     pub scales: ScaleParams,
     pub refine: RefineParams,
-    /// When less than this share of the pixels passes the forward–backward check, the flow is
-    /// computed again with the next finer preset (fast → medium → high) and the better mask is
-    /// kept. 0.75: on every case measured but one, 83–94 % passes with the default preset; on
-    /// FlyingThings3D (motions of 65–85 px) 65 % does, and its depth error with the default
-    /// preset swings between 0.58 and 1.44 with the superpixel count against 0.52–0.64 with
-    /// `high`. Given flow is never recomputed.
+    /// A share in [0, 1]: when less than this share of the pixels passes the forward–backward
+    /// check, the flow is computed again with the next finer preset (fast → medium → high) and
+    /// the pass with the most trusted pixels is kept; 0 never computes it again, 1 always goes on
+    /// to `high`. 0.75: on every case measured but one, 83–94 % passes with the default preset;
+    /// on FlyingThings3D (motions of 65–85 px) 65 % does, and its depth error with the default
+    /// preset swings between 0.58 and 1.44 with the superpixel count (1200–1700) against
+    /// 0.52–0.72 with `high`. Given flow is never recomputed.
     pub min_reliable_flow: f64,
 }
 
@@ -107,7 +111,8 @@ pub struct Report {
     pub input_size: (usize, usize),
     pub params: Params,
     pub timings_ms: Vec<(Stage, f64)>,
-    /// Parameters of the computed flow; `None` when the flow was given.
+    /// Parameters of the computed flow that was kept (a finer preset than the one asked for when
+    /// too little of that passed its check: see `notes`); `None` when the flow was given.
     pub flow: Option<FlowParams>,
     /// Share of the working-resolution pixels whose flow is trusted.
     pub reliable_flow: f64,
@@ -187,6 +192,12 @@ pub fn reconstruct(
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
+    if !(0.0..=1.0).contains(&params.min_reliable_flow) {
+        return Err(Error::InvalidParameter(format!(
+            "min_reliable_flow {} must be a share in [0, 1]",
+            params.min_reliable_flow
+        )));
+    }
     let (w, h) = pair.frame1.size();
     let k = pair.camera.intrinsics;
     let mut timings = Vec::new();
@@ -271,8 +282,7 @@ pub fn reconstruct(
         params: *params,
         timings_ms: timings,
         flow: flow_params,
-        reliable_flow: reliable.data().iter().filter(|&&r| r).count() as f64
-            / reliable.len().max(1) as f64,
+        reliable_flow: trusted_share(&reliable),
         superpixels: sp.len(),
         degenerate: soup
             .pieces
@@ -308,8 +318,12 @@ pub fn reconstruct(
 /// Flow by [`compute_flow`] with `params`, computed again with the next finer preset
 /// ([`FlowParams::finer`]) while less than `min_reliable` of the pixels passes the
 /// forward–backward check (large motions that the coarser preset tracks badly); the pass with
-/// the most trusted pixels is kept, with the parameters it used, and each new pass adds a note.
-/// `progress` gets the share of the work done in [0, 1]: each pass covers half of what is left.
+/// the most trusted pixels is kept, with the parameters it used. Each new pass adds a note, and
+/// so does keeping an earlier pass than the last.
+///
+/// `progress` gets the share of the work done in [0, 1]. A pass that may be followed by a finer
+/// one gets the share of what is left that its preset's cost has beside the finer one's
+/// ([`Preset::relative_cost`]); the last possible pass gets all that is left.
 fn trusted_flow(
     pair: &FramePair,
     params: FlowParams,
@@ -317,16 +331,17 @@ fn trusted_flow(
     notes: &mut Vec<String>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<(FlowPair, FlowParams)> {
-    let share =
-        |m: &Grid<bool>| m.data().iter().filter(|&&r| r).count() as f64 / m.len().max(1) as f64;
+    let name = |p: &FlowParams| p.named_preset().map_or("custom", Preset::name);
     let mut start = 0.0f32;
     let mut run = |p: &FlowParams| -> Result<(f64, FlowPair)> {
-        let (from, span) = (start, 0.5 * (1.0 - start));
+        let cost = |p: &FlowParams| p.named_preset().map_or(1.0, Preset::relative_cost);
+        let share = p.finer().map_or(1.0, |f| cost(p) / (cost(p) + cost(&f)));
+        let (from, span) = (start, share * (1.0 - start));
         let computed = compute_flow(&pair.frame1, &pair.frame2, p, &mut |f| {
             progress(from + span * f)
         })?;
         start += span;
-        Ok((share(&computed.reliable), computed))
+        Ok((trusted_share(&computed.reliable), computed))
     };
     let (mut trusted, mut best) = run(&params)?;
     let (mut best_share, mut best_params, mut used) = (trusted, params, params);
@@ -335,14 +350,23 @@ fn trusted_flow(
             "only {:.0} % of the flow passed the forward–backward check with preset {}; computed \
              again with preset {}",
             100.0 * trusted,
-            used.preset_name().unwrap_or("custom"),
-            finer.preset_name().unwrap_or("custom"),
+            name(&used),
+            name(&finer),
         ));
         let (share, flow) = run(&finer)?;
         if share > best_share {
             (best_share, best, best_params) = (share, flow, finer);
         }
         (trusted, used) = (share, finer);
+    }
+    if best_params != used {
+        notes.push(format!(
+            "kept the flow of preset {} ({:.0} % passed its check; {:.0} % with preset {})",
+            name(&best_params),
+            100.0 * best_share,
+            100.0 * trusted,
+            name(&used),
+        ));
     }
     progress(1.0);
     Ok((best, best_params))

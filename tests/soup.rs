@@ -227,49 +227,62 @@ fn computed_flow_flag_and_street_beat_a_constant_depth() {
 
 #[test]
 fn flow_is_computed_again_finer_while_too_little_passes_its_check() {
-    use superpixel_soup::flow::{FlowParams, Preset};
+    use superpixel_soup::flow::{FlowParams, Preset, compute_flow, trusted_share};
     let s = render(SceneKind::StaticRoom, 256, 110).unwrap();
     let pair = pair_of(&s.frame1, &s.frame2, s.intrinsics);
     let fast = FlowParams::preset(Preset::Fast);
+    let params = |min_reliable_flow| Params {
+        superpixels: superpixel_soup::superpixels::SlicParams {
+            count: 100,
+            ..Default::default()
+        },
+        min_reliable_flow,
+        ..Params::default()
+    };
     let run = |min_reliable_flow| {
-        let params = Params {
-            superpixels: superpixel_soup::superpixels::SlicParams {
-                count: 100,
-                ..Default::default()
-            },
-            min_reliable_flow,
-            ..Params::default()
-        };
-        reconstruct(&pair, FlowInput::Compute(fast), &params, &mut |_, _| {}).unwrap()
+        reconstruct(
+            &pair,
+            FlowInput::Compute(fast),
+            &params(min_reliable_flow),
+            &mut |_, _| {},
+        )
     };
     // Nothing is ever trusted enough at 1.0: fast, then medium, then high (the last preset).
-    let always = run(1.0);
-    assert_eq!(always.report.notes.len(), 2, "{:?}", always.report.notes);
-    assert!(always.report.notes[1].contains("preset medium; computed again with preset high"));
-    let used = always.report.flow.unwrap().preset_name();
-    let shares: Vec<f64> = [Preset::Fast, Preset::Medium, Preset::High]
+    let always = run(1.0).unwrap();
+    let notes = &always.report.notes;
+    assert!(notes.len() >= 2, "{notes:?}");
+    assert!(notes[1].contains("preset medium; computed again with preset high"));
+    let shares: Vec<f64> = Preset::ALL
         .into_iter()
         .map(|p| {
-            let f = superpixel_soup::flow::compute_flow(
+            let f = compute_flow(
                 &pair.frame1,
                 &pair.frame2,
                 &FlowParams::preset(p),
                 &mut |_| {},
-            )
-            .unwrap();
-            f.reliable.data().iter().filter(|&&r| r).count() as f64 / f.reliable.len() as f64
+            );
+            trusted_share(&f.unwrap().reliable)
         })
         .collect();
-    // The pass with the most trusted pixels is the one kept.
+    // The pass with the most trusted pixels is the one kept, and a note says so unless it is
+    // the last.
     let best = (0..3)
         .max_by(|&a, &b| shares[a].total_cmp(&shares[b]))
         .unwrap();
-    assert_eq!(used, Some(Preset::ALL[best].name()));
+    assert_eq!(
+        always.report.flow.unwrap().named_preset(),
+        Some(Preset::ALL[best])
+    );
     assert!((always.report.reliable_flow - shares[best]).abs() < 1e-12);
+    assert_eq!(notes.len(), if best == 2 { 2 } else { 3 }, "{notes:?}");
     // At 0 the given preset is kept.
-    let never = run(0.0);
+    let never = run(0.0).unwrap();
     assert!(never.report.notes.is_empty());
     assert_eq!(never.report.flow, Some(fast));
+    // A share outside [0, 1] is refused.
+    for bad in [1.5, -0.1, f64::NAN] {
+        assert!(matches!(run(bad), Err(Error::InvalidParameter(_))), "{bad}");
+    }
 }
 
 #[test]

@@ -37,6 +37,16 @@ impl Preset {
     /// Every preset, fastest first.
     pub const ALL: [Preset; 3] = [Preset::Fast, Preset::Medium, Preset::High];
 
+    /// Time of the flow both ways relative to `fast` (native, 1024 × 436: 49, 174 and 878 ms;
+    /// docs/RESULTS.md, Speed): how the progress of a run shares out passes of several presets.
+    pub fn relative_cost(self) -> f32 {
+        match self {
+            Preset::Fast => 1.0,
+            Preset::Medium => 3.5,
+            Preset::High => 18.0,
+        }
+    }
+
     /// The name used on the command line: `fast`, `medium` or `high`.
     pub fn name(self) -> &'static str {
         match self {

@@ -114,7 +114,7 @@ impl FlowParams {
     pub fn finer(&self) -> Option<FlowParams> {
         let at = Preset::ALL
             .iter()
-            .position(|&p| DisParams::preset(p) == self.dis)?;
+            .position(|&p| Some(p) == self.named_preset())?;
         let next = *Preset::ALL.get(at + 1)?;
         Some(FlowParams {
             dis: DisParams::preset(next),
@@ -123,12 +123,16 @@ impl FlowParams {
     }
 
     /// The preset whose DIS parameters these are, if any.
-    pub fn preset_name(&self) -> Option<&'static str> {
+    pub fn named_preset(&self) -> Option<Preset> {
         Preset::ALL
             .into_iter()
             .find(|&p| DisParams::preset(p) == self.dis)
-            .map(Preset::name)
     }
+}
+
+/// Share of the pixels of `mask` that are trusted (true), in [0, 1]; 0 for an empty mask.
+pub fn trusted_share(mask: &Grid<bool>) -> f64 {
+    mask.data().iter().filter(|&&r| r).count() as f64 / mask.len().max(1) as f64
 }
 
 impl Default for FlowParams {
@@ -218,7 +222,7 @@ mod tests {
         assert_eq!(medium.dis, DisParams::preset(Preset::Medium));
         assert_eq!(medium.fb_threshold, 0.7);
         let high = medium.finer().unwrap();
-        assert_eq!(high.preset_name(), Some("high"));
+        assert_eq!(high.named_preset(), Some(Preset::High));
         assert_eq!(high.finer(), None);
         let custom = FlowParams {
             dis: DisParams {
@@ -228,7 +232,7 @@ mod tests {
             ..fast
         };
         assert_eq!(custom.finer(), None);
-        assert_eq!(custom.preset_name(), None);
+        assert_eq!(custom.named_preset(), None);
     }
 
     #[test]

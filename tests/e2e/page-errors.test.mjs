@@ -39,6 +39,12 @@ test('bad inputs give readable messages and the page stays usable', async () => 
     await expectError([{ name: 'cut.png', mimeType: 'image/png', buffer: one.buffer.subarray(0, one.buffer.length / 2) }, two]),
     `cut.png ${undecodable}`,
   );
+  // A JPEG header with nothing after it: both decoders refuse it, and the library's reason is told.
+  assert.equal(
+    await expectError([{ name: 'broken.jpg', mimeType: 'image/jpeg', buffer: Buffer.from([0xff, 0xd8, 0xff, 0xe0, 1, 2, 3]) }, two]),
+    'broken.jpg could not be decoded: the file is damaged or in a format this browser cannot read ' +
+      '(the library\'s JPEG decoder: cannot decode image: truncated JPEG (no end-of-image marker)).',
+  );
 
   const tiny = makePng(16, 16, (x, y) => [x * 16, y * 16, 99]);
   assert.equal(

@@ -80,7 +80,7 @@ export async function takeFiles(fileList) {
   }
   let frames;
   try {
-    frames = await decodeImages(images);
+    frames = await decodeImages(images, current);
   } catch (e) {
     if (current()) {
       fail(e.message);
@@ -88,6 +88,7 @@ export async function takeFiles(fileList) {
     return;
   }
   if (!current()) {
+    frames.forEach(closeFrame);
     return;
   }
   hideVideo();
@@ -119,18 +120,20 @@ export async function decodeImage(file) {
  * when not read yet), decoder: 'library' | 'browser' }.
  */
 async function decodeFile(file, side) {
+  let refused = '';
   if (await isJpeg(file)) {
     const decoded = await decodeJpeg(file, side);
-    if (decoded !== null) {
+    if (!(decoded instanceof Error)) {
       return decoded;
     }
+    refused = ` (the library's JPEG decoder: ${decoded.message})`;
   }
   try {
     const size = await imageSize(file);
     return { bitmap: await decodeAt(file, size, side), size, exif: null, decoder: 'browser' };
   } catch {
     throw new Error(`${file.name} could not be decoded: the file is damaged or in a format this ` +
-      'browser cannot read.');
+      `browser cannot read${refused}.`);
   }
 }
 
@@ -141,8 +144,9 @@ async function isJpeg(file) {
 }
 
 /**
- * `decodeFile` of a JPEG by the library (www/pipeline.js `decodeJpeg`), or null when the
- * decoder refuses it (the browser then decodes it).
+ * `decodeFile` of a JPEG by the library (www/pipeline.js `decodeJpeg`), or the Error saying why
+ * not when the decoder refuses it or its pixels cannot be made into a bitmap (the browser then
+ * decodes the file).
  */
 async function decodeJpeg(file, side) {
   let reply;
@@ -150,13 +154,16 @@ async function decodeJpeg(file, side) {
     reply = await page.pipeline.decodeJpeg(await file.arrayBuffer(), side);
   } catch (e) {
     console.info(`${file.name}: decoded by the browser (the library's JPEG decoder: ${e.message})`);
-    return null;
+    return e;
   }
   const { pixels, frameWidth, frameHeight, width, height, exif } = reply;
   try {
     const image = new ImageData(new Uint8ClampedArray(pixels.buffer), frameWidth, frameHeight);
     const bitmap = await createImageBitmap(image, { premultiplyAlpha: 'none', colorSpaceConversion: 'none' });
     return { bitmap, size: [width, height], exif, decoder: 'library' };
+  } catch (e) {
+    console.info(`${file.name}: decoded by the browser (its pixels from the library: ${e.message})`);
+    return e;
   } finally {
     freeArrays(pixels);
   }
@@ -185,11 +192,18 @@ function decodeAt(file, [width, height], side) {
   return createImageBitmap(file, { ...DECODE, resizeWidth: w, resizeHeight: h, resizeQuality: 'high' });
 }
 
-/** Decodes image files one after the other (only one photo is ever held at full size). */
-export async function decodeImages(files) {
+/**
+ * Decodes image files one after the other (only one photo is ever held at full size). With
+ * `wanted` (a function), stops before the next photo once it returns false (a newer drop or a
+ * cancel) and rejects, closing what it decoded.
+ */
+export async function decodeImages(files, wanted = () => true) {
   const frames = [];
   try {
     for (const file of files) {
+      if (!wanted()) {
+        throw new Error('the photos were replaced before they were decoded');
+      }
       frames.push(await decodeImage(file));
     }
   } catch (e) {
@@ -259,9 +273,10 @@ export async function pixelsForRun(frame) {
   if (frame.side !== side && frame.source !== null) {
     const [w, h] = workingSize(frame.width, frame.height, side);
     if (w !== frame.bitmap.width || h !== frame.bitmap.height) {
-      const { bitmap } = await decodeFile(frame.source, side);
+      const { bitmap, decoder } = await decodeFile(frame.source, side);
       frame.bitmap.close();
       frame.bitmap = bitmap;
+      frame.decoder = decoder;
     }
     frame.side = side;
   }
@@ -340,8 +355,9 @@ export async function loadSample() {
       ['frame1.png', 'frame2.png', 'intrinsics.txt'].map(fetchFile),
     );
     const [fx, fy, cx, cy] = (await intrinsics.text()).trim().split(/\s+/).map(Number);
-    const frames = await decodeImages([one, two]);
+    const frames = await decodeImages([one, two], current);
     if (!current()) {
+      frames.forEach(closeFrame);
       return;
     }
     hideVideo();

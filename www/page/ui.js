@@ -21,7 +21,7 @@ export const page = {
    * thumbnail (a small ImageBitmap), `source` (the file, decoded again when the working size
    * changes; null for a video frame), `bitmap` (the pixels at the working size for `side`, its
    * long side) and `decoder` ('library' for a JPEG decoded by src/jpeg.rs, 'browser', or null
-   * for a video frame) }. Photos are never kept at full size: 12 megapixels are 48 MB of RGBA.
+   * for a video frame and for a frame restored from a session saved before it was recorded) }. Photos are never kept at full size: 12 megapixels are 48 MB of RGBA.
    */
   frames: [],
   /** "auto": intrinsics from EXIF or the default (resolved by the library); "user": the form's. */
