@@ -323,7 +323,8 @@ pub fn reconstruct(
 ///
 /// `progress` gets the share of the work done in [0, 1]. A pass that may be followed by a finer
 /// one gets the share of what is left that its preset's cost has beside the finer one's
-/// ([`Preset::relative_cost`]); the last possible pass gets all that is left.
+/// ([`Preset::relative_cost`]); the last possible pass (every pass when `min_reliable` is 0)
+/// gets all that is left.
 fn trusted_flow(
     pair: &FramePair,
     params: FlowParams,
@@ -335,7 +336,8 @@ fn trusted_flow(
     let mut start = 0.0f32;
     let mut run = |p: &FlowParams| -> Result<(f64, FlowPair)> {
         let cost = |p: &FlowParams| p.named_preset().map_or(1.0, Preset::relative_cost);
-        let share = p.finer().map_or(1.0, |f| cost(p) / (cost(p) + cost(&f)));
+        let next = p.finer().filter(|_| min_reliable > 0.0);
+        let share = next.map_or(1.0, |f| cost(p) / (cost(p) + cost(&f)));
         let (from, span) = (start, share * (1.0 - start));
         let computed = compute_flow(&pair.frame1, &pair.frame2, p, &mut |f| {
             progress(from + span * f)

@@ -248,7 +248,24 @@ fn flow_is_computed_again_finer_while_too_little_passes_its_check() {
         )
     };
     // Nothing is ever trusted enough at 1.0: fast, then medium, then high (the last preset).
-    let always = run(1.0).unwrap();
+    // The flow's progress never goes back and ends at 1.
+    let mut flow_progress = Vec::new();
+    let always = reconstruct(
+        &pair,
+        FlowInput::Compute(fast),
+        &params(1.0),
+        &mut |stage, f| {
+            if stage == superpixel_soup::pipeline::Stage::Flow {
+                flow_progress.push(f);
+            }
+        },
+    )
+    .unwrap();
+    assert!(
+        flow_progress.windows(2).all(|w| w[0] <= w[1]),
+        "{flow_progress:?}"
+    );
+    assert_eq!(flow_progress.last(), Some(&1.0));
     let notes = &always.report.notes;
     assert!(notes.len() >= 2, "{notes:?}");
     assert!(notes[1].contains("preset medium; computed again with preset high"));
