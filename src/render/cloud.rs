@@ -24,13 +24,8 @@ impl PointCloud {
         rgb: &[u8],
         labels: Option<&[u32]>,
     ) -> Result<PointCloud> {
-        let n = PointCloud::check_lengths(
-            pos1.len(),
-            pos2.map(<[f32]>::len),
-            rgb.len(),
-            labels.map(<[u32]>::len),
-        )?;
-        let mut cloud = PointCloud::with_capacity(n, labels.is_some());
+        // `extend` checks the lengths.
+        let mut cloud = PointCloud::with_capacity(pos1.len() / 3, labels.is_some());
         cloud.extend(pos1, pos2, rgb, labels)?;
         Ok(cloud)
     }

@@ -136,6 +136,13 @@ export async function convertImage(page, buffer, { type = 'image/png', width, he
   return Buffer.from(base64, 'base64');
 }
 
+/** `jpeg` with an EXIF block (APP1, right after SOI) holding the TIFF structure `tiff`. */
+function withExif(jpeg, tiff) {
+  const payload = Buffer.concat([Buffer.from('Exif\0\0', 'latin1'), tiff]);
+  const marker = Buffer.from([0xff, 0xe1, (payload.length + 2) >> 8, (payload.length + 2) & 0xff]);
+  return Buffer.concat([jpeg.subarray(0, 2), marker, payload, jpeg.subarray(2)]);
+}
+
 /**
  * A JPEG with an EXIF block (APP1) holding a 35 mm-equivalent focal length: IFD0 points to an
  * Exif IFD with FocalLengthIn35mmFilm (tag 0xA405, SHORT), little-endian TIFF.
@@ -157,9 +164,7 @@ export function withExifFocal(jpeg, focal35mm) {
   tiff.writeUInt32LE(1, 32);
   tiff.writeUInt16LE(focal35mm, 36);
   tiff.writeUInt32LE(0, 40);
-  const payload = Buffer.concat([Buffer.from('Exif\0\0', 'latin1'), tiff]);
-  const marker = Buffer.from([0xff, 0xe1, (payload.length + 2) >> 8, (payload.length + 2) & 0xff]);
-  return Buffer.concat([jpeg.subarray(0, 2), marker, payload, jpeg.subarray(2)]);
+  return withExif(jpeg, tiff);
 }
 
 /**
@@ -177,7 +182,5 @@ export function withExifOrientation(jpeg, o) {
   tiff.writeUInt32LE(1, 14);
   tiff.writeUInt16LE(o, 18);
   tiff.writeUInt32LE(0, 22); // no next IFD
-  const payload = Buffer.concat([Buffer.from('Exif\0\0', 'latin1'), tiff]);
-  const marker = Buffer.from([0xff, 0xe1, (payload.length + 2) >> 8, (payload.length + 2) & 0xff]);
-  return Buffer.concat([jpeg.subarray(0, 2), marker, payload, jpeg.subarray(2)]);
+  return withExif(jpeg, tiff);
 }
