@@ -173,6 +173,7 @@ mod tests {
                 piece([0.0, 0.0, 0.25], [0.0, 0.0, 0.0]),
             ],
             hypotheses: Vec::new(),
+            noise_px: 0.0,
         };
         (soup, Grid::from_fn(6, 2, |x, _| (x / 2) as u32))
     }

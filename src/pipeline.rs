@@ -58,7 +58,8 @@ impl Stage {
 
 /// Every tunable of the pipeline with its default (each documented on its own type). Fields
 /// missing from a deserialised value keep their defaults (parameters saved by an older version;
-/// only at this level: a nested object given in part does not deserialise).
+/// also inside `init` and `scales`; elsewhere a nested object given in part does not
+/// deserialise).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct Params {

@@ -137,7 +137,7 @@ pub fn robust_motion(
         threshold: to_normalised(loose_px),
     };
     let subset = |idx: &[usize]| idx.iter().map(|&i| points[i]).collect::<Vec<_>>();
-    let (_, mut inliers) = ransac(
+    let (e0, inliers) = ransac(
         points.len(),
         None,
         &params,
@@ -145,11 +145,27 @@ pub fn robust_motion(
         |s| solver.solve(&subset(s)),
         |e, i| sampson(e, &points[i]),
     )?;
+    let count = |m: &Motion, px: f64| {
+        let e = m.essential();
+        (0..points.len())
+            .filter(|&i| sampson(&e, &points[i]) < to_normalised(px))
+            .count()
+    };
+    let within = |m: &Motion, px: f64| -> Vec<Correspondence> {
+        let e = m.essential();
+        points
+            .iter()
+            .filter(|c| sampson(&e, c) < to_normalised(px))
+            .copied()
+            .collect()
+    };
+    let mut motion = decompose(&e0, &subset(&inliers))?;
     let mut px = loose_px;
-    let mut best = None;
-    while px > final_px || best.is_none() {
+    while px > final_px {
         px = (px / 2.0).max(final_px);
-        let pool = std::mem::take(&mut inliers);
+        let pool = (0..points.len())
+            .filter(|&i| sampson(&motion.essential(), &points[i]) < to_normalised(2.0 * px))
+            .collect::<Vec<_>>();
         let inner = RansacParams {
             sample_size: match solver {
                 MinimalSolver::FivePoint => 5,
@@ -158,25 +174,24 @@ pub fn robust_motion(
             iterations: iterations.clamp(10, 30),
             threshold: to_normalised(px),
         };
-        let (e, next) = ransac(
+        let mut candidates = vec![motion, refine_motion(&within(&motion, px), &motion, 8)];
+        if let Some((e, next)) = ransac(
             points.len(),
             Some(&pool),
             &inner,
             rng,
             |s| solver.solve(&subset(s)),
             |e, i| sampson(e, &points[i]),
-        )?;
-        if next.len() < solver.sample_size() {
-            return None;
+        ) && let Some(m) = decompose(&e, &subset(&next))
+        {
+            candidates.push(refine_motion(&within(&m, px), &m, 8));
         }
-        inliers = next;
-        best = Some(e);
+        motion = candidates
+            .into_iter()
+            .map(|m| (count(&m, px), m))
+            .max_by_key(|c| c.0)?
+            .1;
     }
-    let e = match solver {
-        MinimalSolver::EightPoint => eight_point(&subset(&inliers))?,
-        MinimalSolver::FivePoint => best?,
-    };
-    let motion = decompose(&e, &subset(&inliers))?;
     let e = motion.essential();
     let inliers = (0..points.len())
         .filter(|&i| sampson(&e, &points[i]) < to_normalised(final_px))

@@ -70,4 +70,7 @@ pub struct Soup {
     pub pieces: Vec<Piece>,
     /// Distinct motions (R, t̂) found; `pieces[i].hypothesis` indexes this list.
     pub hypotheses: Vec<crate::geometry::essential::Motion>,
+    /// The flow's noise as the soup sees it (px): the median over superpixels of the mean
+    /// transfer error of their motion with their best plane.
+    pub noise_px: f64,
 }

@@ -30,12 +30,19 @@
 //! 1. *Rigid segments.* Touching pieces that use the same motion hypothesis and whose planes
 //!    meet at equal scale (median |c₁| below `segment_gap`) are one rigid body with one scale;
 //!    union-find over such pairs gives the segments. (One scale per *hypothesis* is wrong on
-//!    dynamic scenes: several walkers can share one motion up to scale.)
+//!    dynamic scenes: several walkers can share one motion up to scale.) The static world is
+//!    the exception: every touching pair of pieces on the ego-motion whose own parallax
+//!    measures their depth well joins, whether or not their planes meet (a box in front of a
+//!    wall is not a separate body when neither moves; see `world_parallax`).
 //! 2. *Segment scales* by coordinate descent on E from three starts (a maximum spanning tree of
 //!    the sharpest links; every segment at median depth 1; and TRW-S over offsets on a grid of
 //!    step σ, which moves groups of segments together), each segment moving to the exact
 //!    minimum of its terms (for truncated-linear terms it lies at one of the zero-gap points −c),
-//!    within a band of depth ratios around the largest segment. The lower energy wins.
+//!    within a band of depth ratios around the largest segment. The lower energy wins. Here E
+//!    carries a *figure prior*: where two segments part, the smaller one pays
+//!    `behind_weight` · σ more per link for lying more than σ behind the larger one than in
+//!    front of it. Once a mover's contacts break, contact alone leaves its scale free, and
+//!    the solve used to park movers far behind the world (a car 4–70× too far).
 //! 3. *Tail control.* A piece whose depth disagrees with every neighbour in both frames while
 //!    the flow across its boundary is continuous (nothing in the data justifies the depth edge)
 //!    takes the scale that best meets its neighbours. The number of such pieces is reported.
@@ -56,6 +63,7 @@ use crate::superpixels::graph::BoundaryGraph;
 
 /// Settings of the scale solve. Each value is scale-free and shared by every scene.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[serde(default)]
 pub struct ScaleParams {
     /// σ: truncation of a pair's log-depth gap. A real depth edge costs at most this per pair;
     /// 0.1 is a 10 % depth jump, well above the gap that flow noise leaves between planes that
@@ -87,6 +95,18 @@ pub struct ScaleParams {
     /// its rigid segment by 25 % raises the energy of its rim by a tenth of what it would cost
     /// to break every contact there if each were certain.
     pub min_confidence: f64,
+    /// The figure prior: per link between two rigid segments, the cost (in broken contacts, w σ)
+    /// of the smaller segment lying more than σ behind the larger one where the link's median
+    /// frame-1 gap says so. A small region seen against a larger one is usually in front of it
+    /// (a mover against the world); behind, it would be seen through a hole. Two frames often
+    /// leave a mover's scale free once its contacts break, and then this decides; 10 makes
+    /// lying behind dearer than any contact the move could make.
+    pub behind_weight: f64,
+    /// Pieces of the static world (on the ego-motion) share one scale when their parallax is at
+    /// least this many times the flow's noise: their depth error is then about 1/30 ≈ 3 % or
+    /// less, while pieces near the epipole or far away (little parallax) keep a scale of their
+    /// own that contacts correct.
+    pub world_parallax: f64,
     /// Flow jump (px) across a boundary below which the flow counts as continuous there
     /// (tail control: a depth edge needs a flow edge to be believed).
     pub continuous_flow_px: f64,
@@ -102,6 +122,8 @@ impl Default for ScaleParams {
             band: 12.0,
             pairs_per_boundary: 12,
             continuous_flow_px: 1.0,
+            behind_weight: 10.0,
+            world_parallax: 30.0,
             min_confidence: 0.1,
             support_weight: 4.0,
             flow_scale_px: 0.5,
@@ -149,6 +171,8 @@ pub struct Link {
     pub b: usize,
     /// (w, c) per gap.
     pub terms: Vec<(f64, f64)>,
+    /// The frame-1 gaps alone, (w, c₁) per pair: where the figure prior looks.
+    pub frame1: Vec<(f64, f64)>,
     /// Median frame-1 offset c₁ (the log-depth gap at equal scales).
     pub median_c1: f64,
     /// Median flow jump across the boundary (px).
@@ -172,6 +196,12 @@ impl Link {
         // δ = s_a − s_b: from a, gap = x − other + c; from b, |other − x + c| = |x − other − c|.
         let sign = if from_a { 1.0 } else { -1.0 };
         self.terms.iter().map(move |&(w, c)| (w, sign * c - other))
+    }
+
+    /// The frame-1 terms alone, seen as [`Link::seen_from`] sees all of them.
+    fn frame1_seen_from(&self, from_a: bool, other: f64) -> impl Iterator<Item = (f64, f64)> + '_ {
+        let sign = if from_a { 1.0 } else { -1.0 };
+        self.frame1.iter().map(move |&(w, c)| (w, sign * c - other))
     }
 }
 
@@ -214,38 +244,97 @@ fn truncated(terms: &[(f64, f64)], x: f64, sigma: f64) -> f64 {
         .sum()
 }
 
-/// The exact minimiser of Σ w min(|x + c|, σ) over x in [lo, hi] (the minimum of a sum of
-/// truncated absolute values lies at a kink −c or at a bound), preferring `current` on ties.
+/// A one-sided cost of a segment's log-scale x: `k` when `dir` · (x + c) > σ, where x + c is a
+/// frame-1 log-depth gap to a larger neighbour: with `dir` = 1 the cost is paid when the segment
+/// lies more than σ behind that neighbour (see [`ScaleParams::behind_weight`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Step {
+    pub k: f64,
+    pub c: f64,
+    pub dir: f64,
+}
+
+/// Σ k over the steps active at x.
+fn steps_at(steps: &[Step], x: f64, sigma: f64) -> f64 {
+    steps
+        .iter()
+        .filter(|st| st.dir * (x + st.c) > sigma)
+        .map(|st| st.k)
+        .sum()
+}
+
+/// The exact minimiser of Σ w min(|x + c|, σ) + Σ steps over x in [lo, hi], preferring
+/// `current` on ties. The truncated sum is piecewise linear, concave except at its kinks −c, and
+/// a step only adds a constant on one side of its edge, so the minimum lies at a kink, at a
+/// step's edge (on its free side) or at a bound.
 ///
 /// One sweep over the sorted breakpoints (−c − σ, −c, −c + σ), between which the sum is linear,
-/// gives its value at every kink in O(n log n) instead of O(n²) (segments of the background
-/// carry thousands of terms); [`minimise_truncated_plain`] is the reference it is tested against.
-fn minimise_truncated(terms: &[(f64, f64)], sigma: f64, current: f64, lo: f64, hi: f64) -> f64 {
-    // (position, slope change, is a kink)
-    let mut events: Vec<(f64, f64, bool)> = Vec::with_capacity(3 * terms.len());
+/// gives its value at every candidate in O(n log n) instead of O(n²) (segments of the background
+/// carry thousands of terms); [`minimise_contacts_plain`] is the reference it is tested against.
+fn minimise_contacts(
+    terms: &[(f64, f64)],
+    steps: &[Step],
+    sigma: f64,
+    current: f64,
+    lo: f64,
+    hi: f64,
+) -> f64 {
+    // (position, slope change, is a candidate)
+    let mut events: Vec<(f64, f64, bool)> = Vec::with_capacity(3 * terms.len() + steps.len());
     for &(w, c) in terms {
         events.push((-c - sigma, -w, false));
         events.push((-c, 2.0 * w, true));
         events.push((-c + sigma, -w, false));
     }
+    // A step's edge on its free side: where dir · (x + c) = σ.
+    events.extend(steps.iter().map(|st| (st.dir * sigma - st.c, 0.0, true)));
     events.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // Steps by edge, to add the active ones at each candidate by binary search.
+    let edges = |dir: f64| {
+        let mut v: Vec<(f64, f64)> = steps
+            .iter()
+            .filter(|st| st.dir == dir)
+            .map(|st| (dir * sigma - st.c, st.k))
+            .collect();
+        v.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut sum = 0.0;
+        let prefix: Vec<f64> = std::iter::once(0.0)
+            .chain(v.iter().map(|e| {
+                sum += e.1;
+                sum
+            }))
+            .collect();
+        (v, prefix)
+    };
+    let (behind, behind_sum) = edges(1.0);
+    let (ahead, ahead_sum) = edges(-1.0);
+    let step_cost = |x: f64| {
+        // dir = 1: active when x > edge; dir = −1: active when x < edge.
+        let below = behind.partition_point(|e| e.0 < x);
+        let above = ahead.partition_point(|e| e.0 <= x);
+        behind_sum[below] + (ahead_sum[ahead.len()] - ahead_sum[above])
+    };
     let mut value: f64 = terms.iter().map(|&(w, _)| w * sigma).sum();
     let (mut slope, mut at) = (0.0, f64::NEG_INFINITY);
-    let mut best_kink: Option<(f64, f64)> = None;
-    for &(x, change, kink) in &events {
+    let mut best_candidate: Option<(f64, f64)> = None;
+    for &(x, change, candidate) in &events {
         if at.is_finite() {
             value += slope * (x - at);
         }
         at = x;
-        if kink && (lo..=hi).contains(&x) && best_kink.is_none_or(|(v, _)| value < v) {
-            best_kink = Some((value, x));
+        if candidate && (lo..=hi).contains(&x) {
+            let total = value + step_cost(x);
+            if best_candidate.is_none_or(|(v, _)| total < v) {
+                best_candidate = Some((total, x));
+            }
         }
         slope += change;
     }
-    let mut best = (truncated(terms, current, sigma), current);
-    let candidates = best_kink.map(|(_, x)| x).into_iter().chain([lo, hi]);
+    let total = |x: f64| truncated(terms, x, sigma) + steps_at(steps, x, sigma);
+    let mut best = (total(current), current);
+    let candidates = best_candidate.map(|(_, x)| x).into_iter().chain([lo, hi]);
     for x in candidates.filter(|x| (lo..=hi).contains(x)) {
-        let e = truncated(terms, x, sigma);
+        let e = total(x);
         if e < best.0 - 1e-12 {
             best = (e, x);
         }
@@ -253,23 +342,26 @@ fn minimise_truncated(terms: &[(f64, f64)], sigma: f64, current: f64, lo: f64, h
     best.1
 }
 
-/// [`minimise_truncated`] by evaluating the sum at every kink: the plain reference.
+/// [`minimise_contacts`] by evaluating the sum at every candidate: the plain reference.
 #[cfg(test)]
-fn minimise_truncated_plain(
+fn minimise_contacts_plain(
     terms: &[(f64, f64)],
+    steps: &[Step],
     sigma: f64,
     current: f64,
     lo: f64,
     hi: f64,
 ) -> f64 {
-    let mut best = (truncated(terms, current, sigma), current);
+    let total = |x: f64| truncated(terms, x, sigma) + steps_at(steps, x, sigma);
+    let mut best = (total(current), current);
     for x in terms
         .iter()
         .map(|&(_, c)| -c)
+        .chain(steps.iter().map(|st| st.dir * sigma - st.c))
         .chain([lo, hi])
         .filter(|x| (lo..=hi).contains(x))
     {
-        let e = truncated(terms, x, sigma);
+        let e = total(x);
         if e < best.0 - 1e-12 {
             best = (e, x);
         }
@@ -294,6 +386,7 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
             .collect();
         let mut terms = Vec::new();
         let mut c1s = Vec::new();
+        let mut frame1 = Vec::new();
         for (j, r) in sampled_pairs(edge, inputs, params) {
             let (Some(ra), Some(rb)) = (ray_point(&unit(pa), &r), ray_point(&unit(pb), &r)) else {
                 continue;
@@ -305,6 +398,7 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
                     terms.push((w, c));
                     if f == 0 {
                         c1s.push(c);
+                        frame1.push((w, c));
                     }
                 }
             }
@@ -315,12 +409,14 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
         // Every touching pair carries total weight (its gaps' share) independent of its length.
         let total: f64 = terms.len() as f64;
         terms.iter_mut().for_each(|t| t.0 /= total);
+        frame1.iter_mut().for_each(|t| t.0 /= total);
         jumps.sort_by(f64::total_cmp);
         c1s.sort_by(f64::total_cmp);
         links.push(Link {
             a,
             b,
             terms,
+            frame1,
             median_c1: c1s.get(c1s.len() / 2).copied().unwrap_or(f64::NAN),
             flow_jump: jumps[jumps.len() / 2],
         });
@@ -338,14 +434,19 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
 }
 
 /// Rigid segments: union-find over touching pieces of one hypothesis whose planes meet at
-/// log-scales `s` (median frame-1 gap below `gap`). Returns the segment of every piece (0-based, dense) and the segments' sizes.
+/// log-scales `s` (median frame-1 gap below `gap`), and over touching pieces of the static world
+/// (see `world_pieces`; `world_parallax` is [`ScaleParams::world_parallax`]). Returns the
+/// segment of every piece (0-based, dense) and the segments' sizes.
 pub fn rigid_segments(
     soup: &Soup,
+    inputs: &ScaleInputs,
     problem: &Problem,
     s: &[f64],
     gap: f64,
+    world_parallax: f64,
 ) -> (Vec<usize>, Vec<usize>) {
     let n = soup.pieces.len();
+    let world = world_pieces(soup, inputs, world_parallax);
     let mut parent: Vec<usize> = (0..n).collect();
     fn find(parent: &mut [usize], mut x: usize) -> usize {
         while parent[x] != x {
@@ -355,7 +456,7 @@ pub fn rigid_segments(
         x
     }
     for l in &problem.links {
-        let meet = (l.median_c1 + s[l.a] - s[l.b]).abs() < gap;
+        let meet = (l.median_c1 + s[l.a] - s[l.b]).abs() < gap || (world[l.a] && world[l.b]);
         if soup.pieces[l.a].hypothesis == soup.pieces[l.b].hypothesis && meet {
             let (ra, rb) = (find(&mut parent, l.a), find(&mut parent, l.b));
             if ra != rb {
@@ -385,7 +486,14 @@ pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams)
     let n = soup.pieces.len();
     let zero = vec![0.0; n];
     let energy_start = problem.energy(&zero);
-    let (segment, sizes) = rigid_segments(soup, &problem, &zero, params.segment_gap);
+    let (segment, sizes) = rigid_segments(
+        soup,
+        inputs,
+        &problem,
+        &zero,
+        params.segment_gap,
+        params.world_parallax,
+    );
     let centre = segment_centres(soup, inputs, &segment, sizes.len());
     let (u, sweeps) = solve_segments(&problem, &segment, &sizes, &centre, params, None);
     let mut s: Vec<f64> = segment.iter().map(|&g| u[g] + centre[g]).collect();
@@ -422,7 +530,14 @@ pub fn segment_descent_from(
 ) -> Vec<f64> {
     let problem = build_problem(soup, inputs, params);
     let zero = vec![0.0; soup.pieces.len()];
-    let (segment, sizes) = rigid_segments(soup, &problem, &zero, params.segment_gap);
+    let (segment, sizes) = rigid_segments(
+        soup,
+        inputs,
+        &problem,
+        &zero,
+        params.segment_gap,
+        params.world_parallax,
+    );
     let centre = segment_centres(soup, inputs, &segment, sizes.len());
     let mut offsets = vec![Vec::new(); sizes.len()];
     for (i, &g) in segment.iter().enumerate() {
@@ -443,6 +558,41 @@ pub fn segment_descent_from(
         u0
     };
     segment.iter().map(|&g| u[g] + centre[g]).collect()
+}
+
+/// The pieces of the static world whose depth their own flow measures well: on the ego-motion
+/// (hypothesis 0), with a plane of their own and a parallax of at least `world_parallax` times
+/// the flow's noise ([`Soup::noise_px`]). They are one rigid body and share one scale.
+fn world_pieces(soup: &Soup, inputs: &ScaleInputs, world_parallax: f64) -> Vec<bool> {
+    soup.pieces
+        .iter()
+        .zip(&inputs.superpixels.segments)
+        .map(|(p, seg)| {
+            p.hypothesis == 0
+                && p.degenerate.is_none()
+                && parallax_px(p, inputs, seg.anchor) >= world_parallax * soup.noise_px
+        })
+        .collect()
+}
+
+/// The image displacement (px) the translation of `piece` causes at `anchor` at unit scale: the
+/// parallax its depth is measured by.
+pub fn parallax_px(piece: &Piece, inputs: &ScaleInputs, anchor: [f64; 2]) -> f64 {
+    let k = inputs.intrinsics;
+    let ray = Vector3::from(k.ray(anchor[0], anchor[1]));
+    let unit = Piece {
+        lambda: 1.0,
+        ..*piece
+    };
+    let Some(p) = ray_point(&unit, &ray) else {
+        return 0.0;
+    };
+    let turned = piece.r * ray;
+    if turned.z <= 0.0 {
+        return 0.0;
+    }
+    let d = p.moved / p.moved.z - turned / turned.z;
+    (k.fx * k.fy).sqrt() * d.x.hypot(d.y)
 }
 
 /// Sets every piece's λ = e^(s_i), normalised so the median λ is 1.
@@ -488,8 +638,15 @@ fn segment_centres(soup: &Soup, inputs: &ScaleInputs, segment: &[usize], count: 
         .collect()
 }
 
+/// True when segment `g` is the figure against `h` (the smaller of the two, by pieces; the
+/// later one on a tie): the side the figure prior keeps from lying behind.
+fn is_figure(sizes: &[usize], g: usize, h: usize) -> bool {
+    (sizes[g], std::cmp::Reverse(g)) < (sizes[h], std::cmp::Reverse(h))
+}
+
 /// Coordinate descent over segment offsets u (log-scale s = centre + u), from three starts;
-/// returns the better u and the sweeps run.
+/// returns the better u and the sweeps run. Only links between segments depend on u, so the
+/// descent works on [`PairTerms`].
 fn solve_segments(
     problem: &Problem,
     segment: &[usize],
@@ -499,49 +656,47 @@ fn solve_segments(
     only_start: Option<Vec<f64>>,
 ) -> (Vec<f64>, usize) {
     let count = sizes.len();
+    let sigma = problem.sigma;
     let reference = (0..count).max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
     let band = params.band.max(1.0).ln();
-    // Links between segments, with their terms re-expressed in u: gap = ±(u_g − u_h) + c'.
-    let mut between: Vec<Vec<usize>> = vec![Vec::new(); count];
-    for (e, l) in problem.links.iter().enumerate() {
-        let (ga, gb) = (segment[l.a], segment[l.b]);
-        if ga != gb {
-            between[ga].push(e);
-            between[gb].push(e);
-        }
+    let pairs = segment_pair_terms(problem, segment, sizes, centre, params.behind_weight);
+    let mut around: Vec<Vec<(usize, usize)>> = vec![Vec::new(); count];
+    for &(g, h) in pairs.keys() {
+        around[g].push((g, h));
+        around[h].push((g, h));
     }
-    let energy = |u: &[f64]| {
-        let s: Vec<f64> = segment.iter().map(|&g| u[g] + centre[g]).collect();
-        problem.energy(&s)
+    let energy = |u: &[f64]| -> f64 {
+        pairs
+            .iter()
+            .map(|(&(g, h), pair)| pair.value(u[g] - u[h], sigma))
+            .sum()
     };
-    let seg_terms = |g: usize, u: &[f64]| -> Vec<(f64, f64)> {
-        let mut out = Vec::new();
-        for &e in &between[g] {
-            let l = &problem.links[e];
-            // s = centre + u: the other segment's log-scale, relative to this one's centre.
-            let h = if segment[l.a] == g {
-                segment[l.b]
+    // Segment g's terms as functions of its own offset x, the others fixed at u.
+    let seg_terms = |g: usize, u: &[f64]| -> (Vec<(f64, f64)>, Vec<Step>) {
+        let (mut terms, mut steps) = (Vec::new(), Vec::new());
+        for key in &around[g] {
+            let pair = &pairs[key];
+            // d = x − u_h seen from the first of the pair, d = u_h − x from the second.
+            let (sign, other) = if key.0 == g {
+                (1.0, u[key.1])
             } else {
-                segment[l.a]
+                (-1.0, u[key.0])
             };
-            out.extend(l.seen_from(segment[l.a] == g, u[h] + centre[h] - centre[g]));
+            terms.extend(pair.terms.iter().map(|&(w, c)| (w, sign * c - other)));
+            steps.extend(pair.behind.iter().map(|st| Step {
+                k: st.k,
+                c: sign * st.c - other,
+                dir: sign * st.dir,
+            }));
         }
-        out
+        (terms, steps)
     };
     let starts = match only_start {
         Some(start) => vec![start],
         None => vec![
-            spanning_tree_start(problem, segment, centre, count, reference, band),
+            spanning_tree_start(&pairs, sigma, count, reference, band),
             vec![0.0; count],
-            discrete_start(
-                problem,
-                segment,
-                centre,
-                count,
-                reference,
-                band,
-                problem.sigma,
-            ),
+            discrete_start(&pairs, sigma, count, reference, band, sigma),
         ],
     };
     let mut best: Option<(f64, Vec<f64>)> = None;
@@ -552,12 +707,12 @@ fn solve_segments(
             sweeps += 1;
             let mut moved = false;
             for g in 0..count {
-                if Some(g) == reference || between[g].is_empty() {
+                if Some(g) == reference || around[g].is_empty() {
                     continue;
                 }
                 let r = reference.map_or(0.0, |r| u[r]);
-                let terms = seg_terms(g, &u);
-                let x = minimise_truncated(&terms, problem.sigma, u[g], r - band, r + band);
+                let (terms, steps) = seg_terms(g, &u);
+                let x = minimise_contacts(&terms, &steps, sigma, u[g], r - band, r + band);
                 if (x - u[g]).abs() > 1e-9 {
                     moved = true;
                     u[g] = x;
@@ -578,48 +733,109 @@ fn solve_segments(
     )
 }
 
-/// Every link between two different segments g < h, its terms as functions of d = u_g − u_h
-/// (segment offsets u, log-scale s = centre + u): Σ w min(|d + c|, σ) per segment pair.
+/// The terms between two segments g < h as functions of d = u_g − u_h (segment offsets u,
+/// log-scale s = centre + u).
+#[derive(Clone, Debug, Default)]
+struct Pair {
+    /// Their links' contact terms: Σ w min(|d + c|, σ).
+    terms: Vec<(f64, f64)>,
+    /// The figure prior: the smaller segment's cost for lying behind the larger one, where the
+    /// weighted median of their frame-1 gaps puts it more than σ behind (`None` with a zero
+    /// [`ScaleParams::behind_weight`]).
+    behind: Vec<Step>,
+}
+
+impl Pair {
+    fn value(&self, d: f64, sigma: f64) -> f64 {
+        truncated(&self.terms, d, sigma) + steps_at(&self.behind, d, sigma)
+    }
+}
+
+/// Every pair of touching segments (g < h) and its [`Pair`].
+type PairTerms = std::collections::BTreeMap<(usize, usize), Pair>;
+
+/// Every link between two different segments, gathered into [`PairTerms`]; `kappa` is
+/// [`ScaleParams::behind_weight`].
 fn segment_pair_terms(
     problem: &Problem,
     segment: &[usize],
+    sizes: &[usize],
     centre: &[f64],
-) -> std::collections::BTreeMap<(usize, usize), Vec<(f64, f64)>> {
-    let mut pairs: std::collections::BTreeMap<(usize, usize), Vec<(f64, f64)>> = Default::default();
+    kappa: f64,
+) -> PairTerms {
+    let mut pairs = PairTerms::new();
     for l in &problem.links {
         let (ga, gb) = (segment[l.a], segment[l.b]);
         if ga == gb {
             continue;
         }
-        // Seen from g with h's offset at 0: δ = (centre_a + u_a) − (centre_b + u_b).
+        // Seen from g with h's offset at 0: δ = (centre_a + u_a) − (centre_b + u_b), and the
+        // gap d + c is ln z_g − ln z_h.
         let (g, h) = (ga.min(gb), ga.max(gb));
+        let other = centre[h] - centre[g];
         pairs
             .entry((g, h))
             .or_default()
-            .extend(l.seen_from(ga == g, centre[h] - centre[g]));
+            .terms
+            .extend(l.seen_from(ga == g, other));
+        let mut gaps: Vec<(f64, f64)> = l.frame1_seen_from(ga == g, other).collect();
+        let weight: f64 = gaps.iter().map(|t| t.0).sum();
+        if kappa > 0.0
+            && let Some(c) = weighted_median(&mut gaps)
+        {
+            // The figure g is behind when d + c > σ; the figure h when −(d + c) > σ.
+            let dir = if is_figure(sizes, g, h) { 1.0 } else { -1.0 };
+            pairs.entry((g, h)).or_default().behind.push(Step {
+                k: kappa * problem.sigma * weight,
+                c,
+                dir,
+            });
+        }
     }
     pairs
+}
+
+/// The weighted median of the values c of (w, c) (sorts them); `None` without weight.
+fn weighted_median(items: &mut [(f64, f64)]) -> Option<f64> {
+    items.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let total: f64 = items.iter().map(|t| t.0).sum();
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let mut acc = 0.0;
+    items
+        .iter()
+        .find(|t| {
+            acc += t.0;
+            acc >= 0.5 * total
+        })
+        .map(|t| t.1)
 }
 
 /// Start: a maximum spanning tree over segment pairs by how much their links weigh, walked from
 /// the reference segment; each segment takes the offset that best meets its tree parent.
 fn spanning_tree_start(
-    problem: &Problem,
-    segment: &[usize],
-    centre: &[f64],
+    pairs: &PairTerms,
+    sigma: f64,
     count: usize,
     reference: Option<usize>,
     band: f64,
 ) -> Vec<f64> {
     let mut u = vec![0.0; count];
     let Some(root) = reference else { return u };
-    let pairs = segment_pair_terms(problem, segment, centre);
     let mut edges: Vec<((usize, usize), f64, f64)> = pairs
-        .into_iter()
-        .map(|(key, terms)| {
-            let weight: f64 = terms.iter().map(|t| t.0).sum();
-            // Best d = u_g − u_h: the sum is Σ w min(|d + c|, σ).
-            let d = minimise_truncated(&terms, problem.sigma, 0.0, -2.0 * band, 2.0 * band);
+        .iter()
+        .map(|(&key, pair)| {
+            let weight: f64 = pair.terms.iter().map(|t| t.0).sum();
+            // Best d = u_g − u_h.
+            let d = minimise_contacts(
+                &pair.terms,
+                &pair.behind,
+                sigma,
+                0.0,
+                -2.0 * band,
+                2.0 * band,
+            );
             (key, weight, d)
         })
         .collect();
@@ -653,9 +869,8 @@ const DISCRETE_PASSES: usize = 30;
 /// would have to move together with the piece of floor it stands on; the joint labelling sees
 /// such moves. The reference segment stays at 0; all stay at 0 when the band has no room.
 fn discrete_start(
-    problem: &Problem,
-    segment: &[usize],
-    centre: &[f64],
+    pairs: &PairTerms,
+    sigma: f64,
     count: usize,
     reference: Option<usize>,
     band: f64,
@@ -684,16 +899,10 @@ fn discrete_start(
         })
         .collect();
     let mut mrf = Mrf::new(unary);
-    for ((g, h), terms) in segment_pair_terms(problem, segment, centre) {
+    for (&(g, h), pair) in pairs {
         // The table depends on d = u_g − u_h only: 2·labels − 1 values.
         let by_difference: Vec<f64> = (0..2 * labels - 1)
-            .map(|k| {
-                truncated(
-                    &terms,
-                    (k as f64 - (labels - 1) as f64) * step,
-                    problem.sigma,
-                )
-            })
+            .map(|k| pair.value((k as f64 - (labels - 1) as f64) * step, sigma))
             .collect();
         let mut table = Vec::with_capacity(labels * labels);
         for lg in 0..labels {
@@ -733,7 +942,7 @@ fn tail_control(problem: &Problem, s: &mut [f64], params: &ScaleParams) -> usize
             .any(|&e| problem.links[e].flow_jump < params.continuous_flow_px);
         if disagrees && continuous {
             let terms = problem.local_terms(i, s);
-            let x = minimise_truncated(&terms, sigma, s[i], f64::NEG_INFINITY, f64::INFINITY);
+            let x = minimise_contacts(&terms, &[], sigma, s[i], f64::NEG_INFINITY, f64::INFINITY);
             if (x - s[i]).abs() > 1e-9 {
                 s[i] = x;
                 moved += 1;
@@ -753,8 +962,9 @@ pub fn polish(problem: &Problem, s: &mut [f64], sweeps: usize) {
                 continue;
             }
             let terms = problem.local_terms(i, s);
-            let x = minimise_truncated(
+            let x = minimise_contacts(
                 &terms,
+                &[],
                 problem.sigma,
                 s[i],
                 f64::NEG_INFINITY,
@@ -927,7 +1137,14 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
     let n = soup.pieces.len();
     let problem = build_problem(soup, inputs, params);
     let s: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
-    let (segment, sizes) = rigid_segments(soup, &problem, &s, params.segment_gap);
+    let (segment, sizes) = rigid_segments(
+        soup,
+        inputs,
+        &problem,
+        &s,
+        params.segment_gap,
+        params.world_parallax,
+    );
     let largest = (0..sizes.len()).max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
     let step = 1.25f64.ln();
     // Per segment: energy of its rim at offsets −step, 0, +step, and the rim's full weight.
@@ -971,26 +1188,83 @@ mod tests {
     use crate::rng::Rng;
 
     #[test]
-    fn truncated_sums_are_minimised_exactly() {
-        // Against a fine grid on random sums of truncated absolute values.
+    fn contact_sums_are_minimised_exactly() {
+        // Against a fine grid and the plain reference, on random sums of truncated absolute
+        // values with and without one-sided steps.
         let mut rng = Rng::new(5);
-        for _ in 0..50 {
+        for round in 0..100 {
             let terms: Vec<(f64, f64)> = (0..7)
                 .map(|_| (rng.uniform() + 0.1, 2.0 * rng.uniform() - 1.0))
                 .collect();
+            let steps: Vec<Step> = (0..if round % 2 == 0 { 0 } else { 3 })
+                .map(|_| Step {
+                    k: rng.uniform() * 0.3,
+                    c: 2.0 * rng.uniform() - 1.0,
+                    dir: if rng.uniform() < 0.5 { 1.0 } else { -1.0 },
+                })
+                .collect();
             let sigma = 0.05 + 0.3 * rng.uniform();
-            let x = minimise_truncated(&terms, sigma, 0.3, -2.0, 2.0);
+            let total = |x: f64| truncated(&terms, x, sigma) + steps_at(&steps, x, sigma);
+            let x = minimise_contacts(&terms, &steps, sigma, 0.3, -2.0, 2.0);
             let grid = (0..=40_000)
-                .map(|j| truncated(&terms, -2.0 + j as f64 * 1e-4, sigma))
+                .map(|j| total(-2.0 + j as f64 * 1e-4))
                 .fold(f64::INFINITY, f64::min);
-            assert!(truncated(&terms, x, sigma) <= grid + 1e-12);
+            assert!(total(x) <= grid + 1e-12, "round {round}");
             assert!((-2.0..=2.0).contains(&x));
-            let plain = minimise_truncated_plain(&terms, sigma, 0.3, -2.0, 2.0);
+            let plain = minimise_contacts_plain(&terms, &steps, sigma, 0.3, -2.0, 2.0);
             assert!(
-                (truncated(&terms, x, sigma) - truncated(&terms, plain, sigma)).abs() < 1e-9,
+                (total(x) - total(plain)).abs() < 1e-9,
                 "sweep {x} vs plain {plain}"
             );
         }
+    }
+
+    #[test]
+    fn the_figure_prior_keeps_a_loose_mover_in_front() {
+        // Segment 0 (the world, three pieces) and a one-piece mover (piece 3). The mover's
+        // contact with world piece 0 would hold 1 (log-scale) behind, its contact with piece 1
+        // 0.3 in front; the first weighs a little more, so contact alone parks the mover
+        // behind. With the figure prior, lying behind piece 1 costs more and it stays in front.
+        let link = |a, b, w, c: f64| Link {
+            a,
+            b,
+            terms: vec![(w, c)],
+            frame1: vec![(w, c)],
+            median_c1: c,
+            flow_jump: 0.0,
+        };
+        // δ = s_a − s_b with a the mover: gap = δ + c = 0 at δ = −c.
+        let problem = Problem {
+            links: vec![
+                link(0, 1, 1.0, 0.0),
+                link(1, 2, 1.0, 0.0),
+                link(3, 0, 0.5, -1.0),
+                link(3, 1, 0.45, 0.3),
+            ],
+            touching: vec![vec![0, 2], vec![0, 1, 3], vec![1], vec![2, 3]],
+            sigma: 0.1,
+        };
+        let segment = [0, 0, 0, 1];
+        let sizes = [3, 1];
+        let centre = [0.0, 0.0];
+        let solve = |behind_weight| {
+            let params = ScaleParams {
+                behind_weight,
+                ..ScaleParams::default()
+            };
+            solve_segments(&problem, &segment, &sizes, &centre, &params, None).0[1]
+        };
+        assert!((solve(0.0) - 1.0).abs() < 1e-9, "{}", solve(0.0));
+        assert!((solve(1.0) + 0.3).abs() < 1e-9, "{}", solve(1.0));
+    }
+
+    #[test]
+    fn weighted_medians_split_the_weight() {
+        let mut items = vec![(1.0, 3.0), (0.5, -1.0), (2.0, 0.5), (0.2, 9.0)];
+        assert_eq!(weighted_median(&mut items), Some(0.5));
+        let mut heavy = vec![(0.1, 0.0), (5.0, 2.0)];
+        assert_eq!(weighted_median(&mut heavy), Some(2.0));
+        assert_eq!(weighted_median(&mut []), None);
     }
 
     #[test]
@@ -1044,6 +1318,7 @@ mod tests {
             a,
             b,
             terms: vec![(w, c)],
+            frame1: vec![(w, c)],
             median_c1: c,
             flow_jump: 0.0,
         };
@@ -1060,14 +1335,15 @@ mod tests {
         let segment = [0, 1, 2];
         let centre = [0.0; 3];
         let stuck = [0.0; 3];
-        let u = discrete_start(&problem, &segment, &centre, 3, Some(0), 12f64.ln(), 0.1);
+        let pairs = segment_pair_terms(&problem, &segment, &[1, 1, 1], &centre, 0.0);
+        let u = discrete_start(&pairs, 0.1, 3, Some(0), 12f64.ln(), 0.1);
         assert!(u[0].abs() < 1e-12 && (u[1] + 1.0).abs() < 1e-9 && (u[2] + 1.0).abs() < 1e-9);
         assert!(problem.energy(&u) < 1e-9);
         // Each single move from equal scales raises the energy: the start coordinate descent
         // could not leave.
         for g in 1..3 {
             let terms = problem.local_terms(g, &stuck);
-            let x = minimise_truncated(&terms, 0.1, 0.0, -2.0, 2.0);
+            let x = minimise_contacts(&terms, &[], 0.1, 0.0, -2.0, 2.0);
             assert_eq!(x, 0.0);
         }
         assert!(problem.energy(&stuck) > 0.1);
