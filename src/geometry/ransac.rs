@@ -15,9 +15,9 @@ pub struct RansacParams {
 
 /// Runs RANSAC over `n` points, drawing samples from `pool` (point indices; all points when
 /// `None`) and counting inliers over all points: `fit` turns a sample into candidate models,
-/// `error` scores one point under a model. Each new best model is locally optimised (LO-RANSAC):
-/// refitted on all its inliers with `fit`, kept while that adds inliers. Returns the best model and its inlier indices, or
-/// `None` when no sample gave a model or there are fewer points than a sample.
+/// `error` scores one point under a model. Returns the model with the most inliers (the first on
+/// a tie) and its inlier indices, or `None` when no sample gave a model or there are fewer points
+/// than a sample. Local optimisation is the caller's (see `essential::robust_motion`).
 pub fn ransac<M>(
     n: usize,
     pool: Option<&[usize]>,
