@@ -1,7 +1,7 @@
 //! The unit-scale soup: a rigid motion (R, t̂) and a plane m for every superpixel.
 //!
 //! 1. Correspondences: a spread-out sample of each superpixel's pixels with reliable flow.
-//! 2. Motion hypotheses: the camera's ego-motion first (hypothesis 0, [`ego_motion`]: the motion
+//! 2. Motion hypotheses: the camera's ego-motion first (hypothesis 0, `ego_motion`: the motion
 //!    under which the most superpixels are planar patches, not the one with the most epipolar
 //!    inliers), then sequential RANSAC on what it leaves (other movers), then five-point RANSAC
 //!    on each superpixel still badly explained together with its K-NN neighbours (small movers,
@@ -14,7 +14,7 @@
 //!    pays a label cost. α-expansion minimises that energy; each used hypothesis is then
 //!    refitted on its superpixels and the assignment repeated. Finally every superpixel that the
 //!    ego-motion explains about as well as its own hypothesis goes to the ego-motion
-//!    ([`prefer_ego_motion`]): the static world is one rigid body with one scale.
+//!    (`prefer_ego_motion`): the static world is one rigid body with one scale.
 //! 4. Planes: each superpixel's m under its motion by IRLS ([`super::plane`]); patches without
 //!    parallax or behind the camera are flagged and borrow a touching piece's plane and motion.
 
