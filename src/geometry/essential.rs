@@ -121,9 +121,12 @@ impl MinimalSolver {
 /// current motion, that motion polished by Levenberg–Marquardt on its inliers, and the polished
 /// winner of an inner RANSAC (larger eight-point samples, or five-point samples, which stay valid
 /// on planes) drawn from the points within twice the threshold; the one with the most inliers
-/// goes on. (A linear eight-point refit on all the loose inliers, as before, is pulled off by
-/// every point that only lies near its epipolar line: in a crowd it returned motions with 2 %
-/// of the inliers of the truth.) Returns the motion and the inlier indices at `final_px`.
+/// goes on; on a tie the later one in that order (the inner winner, then the polish), so a
+/// polish that loses nothing is kept. (A linear eight-point refit on all the loose inliers, as
+/// before, is pulled off by every point that only lies near its epipolar line: in a crowd it
+/// returned motions with 2 % of the inliers of the truth.) Returns the motion and the inlier
+/// indices at `final_px`, which may be empty: callers that need support check its size. `None`
+/// when no sample gives a motion.
 pub fn robust_motion(
     points: &[Correspondence],
     focal: f64,

@@ -59,8 +59,9 @@ pub struct InitParams {
     /// only by the flow's systematic errors are one motion (see `merge_similar`).
     pub merge_px: f64,
     /// A superpixel goes to the ego-motion when that explains it at most this much worse (px of
-    /// mean transfer error) than its own hypothesis (see `prefer_ego_motion`): 0.3 px is about
-    /// the computed flow's noise, so the data cannot tell the two motions apart there.
+    /// mean transfer error beyond the fitting's noise deadband) than its own hypothesis (see
+    /// `prefer_ego_motion`): 0.3 px is about the computed flow's noise, so the data cannot tell
+    /// the two motions apart there.
     pub ego_preference_px: f64,
     /// A superpixel's depth counts as observed when its translation moves it by this much (px).
     pub min_parallax_px: f64,
@@ -167,10 +168,13 @@ pub fn unit_scale_soup(
 }
 
 /// Gives the ego-motion (hypothesis 0) every superpixel it explains at most `margin_px` worse
-/// than the superpixel's own hypothesis. A planar patch is explained by many motions almost
-/// equally well, and a patch of the static world that a mover's motion wins gets that mover's
-/// scale: its depth is then only as good as the contacts that place the mover. Under the
-/// ego-motion it shares the world's one scale (see `scales::rigid_segments`).
+/// than the superpixel's own hypothesis. `costs` are net of the fitting's noise deadband d (see
+/// `Fitting::set_noise`), so errors below d count as 0: where the own hypothesis fits within d,
+/// the ego-motion takes the superpixel when its raw error is at most d + `margin_px`, that is
+/// when it too fits within the noise plus the margin. A planar patch is explained by many
+/// motions almost equally well, and a patch of the static world that a mover's motion wins gets
+/// that mover's scale: its depth is then only as good as the contacts that place the mover.
+/// Under the ego-motion it shares the world's one scale (see `scales::rigid_segments`).
 fn prefer_ego_motion(costs: &CostTable, margin_px: f64, labels: &mut [usize]) {
     if costs.labels() == 0 {
         return;
@@ -496,7 +500,8 @@ const EGO_TRUNCATION_PX: f64 = 0.5;
 /// Candidate motions [`ego_motion`] scores by planes (5×) and then refines (1×).
 const EGO_CANDIDATES: usize = 4;
 
-/// Correspondences per superpixel when [`ego_motion`] first scores candidates by planes.
+/// Correspondences per superpixel when [`ego_motion`] first scores candidates by planes: every
+/// ⌊n / 8⌋-th of its n points, so 8 to 15 of them (superpixels with fewer are left out).
 const EGO_LIGHT_SAMPLES: usize = 8;
 
 /// The camera's ego-motion: the motion under which the most superpixels are explained as
@@ -507,7 +512,7 @@ const EGO_LIGHT_SAMPLES: usize = 8;
 /// crowd with exact flow: 79.4 % against 78.8 %), which leaves the static world with distorted
 /// planes. A plane per superpixel is the stronger constraint. Candidates come from five-point
 /// samples, ranked first by epipolar inliers at 1 px (the cheap score); the best
-/// 5 × [`EGO_CANDIDATES`] are scored by planes on [`EGO_LIGHT_SAMPLES`] points per superpixel,
+/// 5 × [`EGO_CANDIDATES`] are scored by planes on 8–15 points per superpixel ([`EGO_LIGHT_SAMPLES`]),
 /// and the best [`EGO_CANDIDATES`] refined (Levenberg–Marquardt on the points of the
 /// superpixels they explain, kept while the full planar score falls). `None` when no sample
 /// gives a motion.
@@ -753,6 +758,84 @@ fn fill_degenerate(mut pieces: Vec<Piece>, adjacency: &[Vec<u32>]) -> Vec<Piece>
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    const FOCAL: f64 = 500.0;
+
+    fn camera() -> Motion {
+        Motion {
+            r: nalgebra::Rotation3::from_euler_angles(0.01, -0.02, 0.005).into_inner(),
+            t: Vector3::new(1.0, 0.1, 0.05).normalize(),
+        }
+    }
+
+    /// 60 superpixels of 30 points each: small patches on fronto-parallel planes at depths 3 to
+    /// 12 (at unit translation) spread over the image, seen under `motion`, with `noise_px` of
+    /// Gaussian noise added to their frame-2 positions.
+    fn patches(motion: &Motion, noise_px: f64, rng: &mut Rng) -> Vec<Vec<Correspondence>> {
+        (0..60)
+            .map(|i| {
+                let centre = [(i % 10) as f64 * 0.08 - 0.36, (i / 10) as f64 * 0.08 - 0.2];
+                let m = Vector3::new(0.0, 0.0, 1.0 / (3.0 + (i * 7 % 10) as f64));
+                (0..30)
+                    .map(|_| {
+                        let ray = Vector3::new(
+                            centre[0] + 0.03 * rng.uniform(),
+                            centre[1] + 0.03 * rng.uniform(),
+                            1.0,
+                        );
+                        let x = ray / m.dot(&ray);
+                        let moved = motion.r * x + motion.t;
+                        let noise =
+                            Vector3::new(rng.normal(), rng.normal(), 0.0) * noise_px / FOCAL;
+                        Correspondence {
+                            x1: ray,
+                            x2: moved / moved.z + noise,
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn the_flow_noise_is_the_median_planar_residual() {
+        let motion = camera();
+        let exact = patches(&motion, 0.0, &mut Rng::new(1));
+        let assignment = vec![0; exact.len()];
+        let none = flow_noise(&exact, &[motion], &assignment, FOCAL);
+        assert!(none < 1e-6, "exact flow: {none} px");
+        // Gaussian noise of σ px gives a mean 2D error of σ √(π/2) ≈ 1.25 σ, a little less after
+        // each patch's plane absorbs some of it.
+        let mut noisy = patches(&motion, 0.4, &mut Rng::new(2));
+        let noise = flow_noise(&noisy, &[motion], &assignment, FOCAL);
+        assert!((0.4..0.52).contains(&noise), "0.4 px noise: {noise} px");
+        // Superpixels without samples do not count; none at all gives 0.
+        noisy.extend(std::iter::repeat_with(Vec::new).take(100));
+        let padded = flow_noise(&noisy, &[motion], &vec![0; noisy.len()], FOCAL);
+        assert_eq!(padded, noise);
+        assert_eq!(flow_noise(&[], &[motion], &[], FOCAL), 0.0);
+    }
+
+    #[test]
+    fn the_ego_motion_is_found_by_planes_and_ransac_stands_in_without_it() {
+        let motion = camera();
+        let samples = patches(&motion, 0.2, &mut Rng::new(3));
+        let all: Vec<Correspondence> = samples.iter().flatten().copied().collect();
+        let params = InitParams::default();
+        let angle = |m: &Motion| m.t.dot(&motion.t).clamp(-1.0, 1.0).acos().to_degrees();
+        let ego = ego_motion(&samples, &all, FOCAL, &params, &mut Rng::new(4));
+        let ego = ego.expect("a motion from 1800 points");
+        assert!(angle(&ego) < 0.5, "ego-motion {:.2}° off", angle(&ego));
+        // Too few points for a five-point sample: no ego-motion, and the first RANSAC motion
+        // stands in as hypothesis 0.
+        assert!(ego_motion(&samples, &all[..4], FOCAL, &params, &mut Rng::new(4)).is_none());
+        let hypotheses = global_hypotheses(&all, None, FOCAL, &params, &mut Rng::new(5)).unwrap();
+        assert!(
+            angle(&hypotheses[0]) < 0.5,
+            "RANSAC {:.2}° off",
+            angle(&hypotheses[0])
+        );
+    }
 
     #[test]
     fn the_ego_motion_takes_what_it_explains_about_as_well() {
