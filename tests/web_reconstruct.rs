@@ -15,7 +15,7 @@ use superpixel_soup::input::DEFAULT_MAX_SIDE;
 use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::web::memory::failed_allocation;
 use superpixel_soup::web::reconstruct::{
-    FrameBuilder, PageReconstruction, page_defaults, read_exif, reconstruct,
+    FrameBuilder, PAGE_FLOW_PRESET, PageReconstruction, page_defaults, read_exif, reconstruct,
     resolve_intrinsics_json,
 };
 use wasm_bindgen::{JsCast, JsValue};
@@ -229,9 +229,11 @@ fn exif_intrinsics_and_defaults_as_json() {
     assert_eq!(camera["intrinsics"]["cx"], 319.5);
 
     let defaults: serde_json::Value = serde_json::from_str(&page_defaults().unwrap()).unwrap();
-    // The page's defaults are the library's, every parameter of them.
+    // The page's defaults are the library's, every parameter of them, but for the flow preset
+    // (medium in a browser tab, for memory).
     assert_eq!(defaults["options"]["maxSide"], DEFAULT_MAX_SIDE);
-    assert_eq!(defaults["options"]["flowPreset"], Preset::default().name());
+    assert_eq!(defaults["options"]["flowPreset"], PAGE_FLOW_PRESET.name());
+    assert_eq!(PAGE_FLOW_PRESET, Preset::Medium);
     assert_eq!(
         defaults["options"]["params"],
         serde_json::to_value(Params::default()).unwrap()

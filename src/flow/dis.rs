@@ -26,10 +26,14 @@ use crate::error::{Error, Result};
 pub enum Preset {
     /// Stops two levels above full resolution with a sparse patch grid.
     Fast,
-    /// Stops one level above full resolution (the default).
-    #[default]
+    /// Stops one level above full resolution (OpenCV's default).
     Medium,
-    /// Runs to full resolution with a dense patch grid.
+    /// Runs to full resolution with a dense patch grid. The default: the soup's planes need
+    /// sharp motion boundaries, and medium's half-resolution flow smears a mover's motion over
+    /// the 5–10 px of background beside it (on the synthetic crowd, 27 % of the vectors that
+    /// pass the forward–backward check 2–5 px from a motion boundary are more than 1 px off,
+    /// against 11 % with high), which halves the depth error on most scenes (docs/RESULTS.md).
+    #[default]
     High,
 }
 

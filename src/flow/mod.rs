@@ -137,7 +137,7 @@ pub fn trusted_share(mask: &Grid<bool>) -> f64 {
 
 impl Default for FlowParams {
     fn default() -> Self {
-        FlowParams::preset(Preset::Medium)
+        FlowParams::preset(Preset::default())
     }
 }
 

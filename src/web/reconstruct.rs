@@ -69,12 +69,18 @@ pub struct RunOptions {
     pub photo_sizes: Option<[[usize; 2]; 2]>,
 }
 
+/// The page's flow preset: `medium`, not the library's default `high`. In a browser tab the
+/// high preset's full-resolution levels raise the tab's peak memory on a 12 MP photo pair from
+/// 370 to 456 MiB (worker memory 80 → 157 MiB), above the page's 400 MiB budget, and the end
+/// to end time from 4.1 to 5.3 s (`node benches/page.mjs`); the parameters panel offers `high`.
+pub const PAGE_FLOW_PRESET: Preset = Preset::Medium;
+
 impl Default for RunOptions {
     fn default() -> Self {
         RunOptions {
             params: Params::default(),
             max_side: DEFAULT_MAX_SIDE,
-            flow_preset: Preset::default(),
+            flow_preset: PAGE_FLOW_PRESET,
             intrinsics: None,
             exif1: ExifInfo::default(),
             exif2: ExifInfo::default(),
