@@ -96,7 +96,9 @@ test('ground truth scored in the page equals soup eval, and bad files are explai
   // build's math functions happen to take another branch than native's: a different MRE.)
   const intrinsics = { fx: '614.4', fy: '614.4', cx: '383.5', cy: '163.5' };
   writeFileSync(path.join(caseDir, 'intrinsics.txt'), `${Object.values(intrinsics).join(' ')}\n`);
-  soup('eval', caseDir, '--json', path.join(work, 'eval.json'));
+  // The page's flow preset (`PAGE_FLOW_PRESET` in src/web/reconstruct.rs) is medium; the command
+  // line's default is high.
+  soup('eval', caseDir, '--preset', 'medium', '--json', path.join(work, 'eval.json'));
   const cli = JSON.parse(readFileSync(path.join(work, 'eval.json'), 'utf8'))[0].metrics;
   const pfm = readFileSync(path.join(caseDir, 'depth1.pfm'));
   const dpt = writeDpt(readPfm(pfm));
