@@ -49,13 +49,13 @@
 //!    (κ σ Σw) for lying more than σ behind the larger one (by the link's weighted-median
 //!    frame-1 gap). Once a mover's contacts break, contact alone leaves its scale free, and
 //!    the solve used to park movers far behind the world (a car 4–70× too far). The prior is a
-//!    statement about movers: where the smaller segment is on the ego-motion (a fragment of
-//!    the static world, cut off by a depth edge or a piece without a plane), it does not apply,
-//!    since the background behind a walker is smaller than the walker wherever the walker
-//!    splits it; at the crowd's truth it charged such fragments 18–35 contact units and the
-//!    solve traded whole walkers placed 2–4× wrong for them. Instead a weak *static prior*
-//!    (`static_weight`) ties every segment on the ego-motion to the static world's scale: the
-//!    ego-motion explains its flow at exactly that scale.
+//!    statement about movers: it does not bind measured static world (a segment on the
+//!    ego-motion, mostly of pieces whose parallax measures their depth: `measured_share`), since
+//!    a walker splits the background behind it into fragments smaller than itself. At the
+//!    crowd's truth it charged such fragments 18–35 contact units, and the solve placed whole
+//!    walkers 2–4× wrong to spare them. A weak *static prior* (`static_weight`) ties every
+//!    segment on the ego-motion to the static world's scale instead: the ego-motion explains
+//!    its flow at exactly that scale.
 //! 3. *Tail control.* A piece whose depth disagrees with every neighbour in both frames while
 //!    the flow across its boundary is continuous (nothing in the data justifies the depth edge)
 //!    takes the scale that best meets its neighbours. The number of such pieces is reported.
@@ -111,12 +111,12 @@ pub struct ScaleParams {
     pub min_confidence: f64,
     /// The figure prior: per link between two rigid segments, the cost (in broken contacts, w σ)
     /// of the smaller segment lying more than σ behind the larger one where the link's median
-    /// frame-1 gap says so, unless the smaller one is on the ego-motion (a part of the static
-    /// world, which may lie behind anything). A small moving region seen against a larger one
-    /// is usually in front of it (a mover against the world); behind, it would be seen through
-    /// a hole. Two frames often
-    /// leave a mover's scale free once its contacts break, and then this decides; 10 makes
-    /// lying behind dearer than any contact the move could make.
+    /// frame-1 gap says so, unless the smaller one is measured static world (see
+    /// `measured_share`), which may lie behind anything. A small moving region seen against a
+    /// larger one is usually in front of it (a mover against the world); behind, it would be
+    /// seen through a hole. Two frames often leave a mover's scale free once its contacts
+    /// break, and then this decides; 10 makes lying behind dearer than any contact the move
+    /// could make.
     pub behind_weight: f64,
     /// Pieces of the static world (on the ego-motion) share one scale when their parallax is at
     /// least this many times the flow's noise: their depth error is then about 1/30 ≈ 3 % or
@@ -134,6 +134,12 @@ pub struct ScaleParams {
     /// 20 pieces the pull of one full contact, so contacts overrule it wherever they agree
     /// (0.05–0.3 measured within ±0.01 on most scenes; 0.3 raised the crowd by 0.03).
     pub static_weight: f64,
+    /// A segment on the ego-motion is measured static world, free of the figure prior, when at
+    /// least this share of its pieces have the parallax of `world_parallax`. Half: a fragment
+    /// of mostly poorly measured pieces may be a mover that the ego-motion explains by accident
+    /// (more of them with half-resolution flow: exempting every segment on the ego-motion took
+    /// the street with preset medium from 0.066 to 0.121).
+    pub measured_share: f64,
     /// Flow jump (px) across a boundary below which the flow counts as continuous there
     /// (tail control: a depth edge needs a flow edge to be believed).
     pub continuous_flow_px: f64,
@@ -153,6 +159,7 @@ impl Default for ScaleParams {
             world_parallax: 30.0,
             world_gap: 0.2,
             static_weight: 0.05,
+            measured_share: 0.5,
             min_confidence: 0.1,
             support_weight: 4.0,
             flow_scale_px: 0.5,
@@ -534,6 +541,9 @@ struct Segments {
     centre: Vec<f64>,
     /// Per segment, whether it is on the ego-motion (hypothesis 0): a part of the static world.
     ego: Vec<bool>,
+    /// Per segment, whether it is measured static world: on the ego-motion, with at least
+    /// [`ScaleParams::measured_share`] of its pieces well measured (`world_pieces`).
+    measured: Vec<bool>,
 }
 
 impl Segments {
@@ -546,11 +556,20 @@ impl Segments {
         for (piece, &g) in soup.pieces.iter().zip(&segment) {
             ego[g] = piece.hypothesis == 0;
         }
+        let world = world_pieces(soup, inputs, params.world_parallax);
+        let mut well_measured = vec![0usize; sizes.len()];
+        for (&w, &g) in world.iter().zip(&segment) {
+            well_measured[g] += usize::from(w);
+        }
+        let measured = (0..sizes.len())
+            .map(|g| ego[g] && well_measured[g] as f64 >= params.measured_share * sizes[g] as f64)
+            .collect();
         Segments {
             segment,
             sizes,
             centre,
             ego,
+            measured,
         }
     }
 
@@ -873,7 +892,7 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
         segment,
         sizes,
         centre,
-        ego,
+        ..
     } = segments;
     let kappa = params.behind_weight;
     let mut pairs = PairTerms::new();
@@ -891,10 +910,11 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
             .or_default()
             .terms
             .extend(l.seen_from(ga == g, other));
-        // A part of the static world may lie behind anything: its own parallax placed it.
+        // A measured part of the static world may lie behind anything: its own parallax placed
+        // it.
         let g_is_figure = is_figure(sizes, g, h);
         let figure = if g_is_figure { g } else { h };
-        if kappa <= 0.0 || ego[figure] {
+        if kappa <= 0.0 || segments.measured[figure] {
             continue;
         }
         let mut gaps: Vec<(f64, f64)> = l.frame1_seen_from(ga == g, other).collect();
@@ -1390,7 +1410,8 @@ mod tests {
         assert!(rounded_past_edge > 0, "the rounding case is exercised");
     }
 
-    /// Segments with the given piece-to-segment map, centres and ego-motion flags.
+    /// Segments with the given piece-to-segment map, centres and ego-motion flags (a segment on
+    /// the ego-motion counts as measured static world).
     fn segments_of(segment: &[usize], centre: &[f64], ego: &[bool]) -> Segments {
         let mut sizes = vec![0; centre.len()];
         segment.iter().for_each(|&g| sizes[g] += 1);
@@ -1399,6 +1420,7 @@ mod tests {
             sizes,
             centre: centre.to_vec(),
             ego: ego.to_vec(),
+            measured: ego.to_vec(),
         }
     }
 
