@@ -9,6 +9,7 @@
 //! depth z = 1 / (mᵀx̄). Its motion is X' = R X + λ t̂; scaling a piece by λ scales its depths by
 //! λ and its plane vector m by 1/λ, so the homography K (R + t̂ mᵀ) K⁻¹ is unchanged.
 
+pub mod ground;
 pub mod init;
 pub mod plane;
 pub mod refine;

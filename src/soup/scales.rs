@@ -67,7 +67,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
-use super::{Piece, Soup};
+use super::{Piece, Soup, ground};
 use crate::camera::Intrinsics;
 use crate::flow::FlowField;
 use crate::grid::Grid;
@@ -127,7 +127,9 @@ pub struct ScaleParams {
     /// this median log-depth gap at the world's scale: looser than `segment_gap`, since their
     /// depth is well measured and a larger gap is the flow's error near edges (0.2 = 2σ, a
     /// depth jump of 22 %). Not unconditional: a mover whose motion parallels the camera's is
-    /// explained by the ego-motion at a wrong depth and does not meet the world there.
+    /// explained by the ego-motion at a wrong depth and does not meet the world there. A piece
+    /// on the ego-motion that lies more than this under the ground at the world's scale is not
+    /// static world at all (it sank: see `Segments::new`).
     pub world_gap: f64,
     /// The static prior: each segment on the ego-motion is tied to the static world's scale
     /// as if by this many contacts per piece (each at most σ). Weak: 0.05 gives a segment of
@@ -140,6 +142,16 @@ pub struct ScaleParams {
     /// (more of them with half-resolution flow: exempting every segment on the ego-motion took
     /// the street with preset medium from 0.066 to 0.121).
     pub measured_share: f64,
+    /// The ground prior: each piece outside the static world that lies (by the median of its
+    /// pixels) more than σ under the ground plane (see `soup::ground`: nothing is seen through
+    /// the floor) costs this many broken contacts (w σ); 0 switches the ground off altogether
+    /// (also the split of sunk pieces from the static world, see `world_gap`). 1: a mover of n pieces sunk under the road pays as
+    /// much as n broken contacts, more than the contacts that glued it to the background
+    /// behind it usually save.
+    pub ground_weight: f64,
+    /// The ground plane is trusted only where its pieces cover at least this share of the
+    /// image (3 %: a strip of floor; less is too little to extrapolate a plane from).
+    pub ground_share: f64,
     /// Flow jump (px) across a boundary below which the flow counts as continuous there
     /// (tail control: a depth edge needs a flow edge to be believed).
     pub continuous_flow_px: f64,
@@ -160,6 +172,8 @@ impl Default for ScaleParams {
             world_gap: 0.2,
             static_weight: 0.05,
             measured_share: 0.5,
+            ground_weight: 1.0,
+            ground_share: 0.03,
             min_confidence: 0.1,
             support_weight: 4.0,
             flow_scale_px: 0.5,
@@ -487,14 +501,18 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
 /// Rigid segments: union-find over touching pieces of one hypothesis whose planes meet at
 /// log-scales `s` (median frame-1 gap below [`ScaleParams::segment_gap`], or below
 /// [`ScaleParams::world_gap`] between two pieces of the static world, see `world_pieces`).
-/// Returns the segment of every piece (0-based, dense) and the segments' sizes.
+/// Pieces marked in `apart` join only each other (pieces sunk under the ground, see
+/// `Segments::new`). Returns the segment of every piece (0-based, dense) and the segments'
+/// sizes.
 pub fn rigid_segments(
     soup: &Soup,
     inputs: &ScaleInputs,
     problem: &Problem,
     s: &[f64],
     params: &ScaleParams,
+    apart: Option<&[bool]>,
 ) -> (Vec<usize>, Vec<usize>) {
+    let apart = |i: usize| apart.is_some_and(|a| a[i]);
     let n = soup.pieces.len();
     let world = world_pieces(soup, inputs, params.world_parallax);
     let mut parent: Vec<usize> = (0..n).collect();
@@ -508,7 +526,8 @@ pub fn rigid_segments(
     for l in &problem.links {
         let g = (l.median_c1 + s[l.a] - s[l.b]).abs();
         let meet = g < params.segment_gap || (world[l.a] && world[l.b] && g < params.world_gap);
-        if soup.pieces[l.a].hypothesis == soup.pieces[l.b].hypothesis && meet {
+        let same_side = apart(l.a) == apart(l.b);
+        if soup.pieces[l.a].hypothesis == soup.pieces[l.b].hypothesis && meet && same_side {
             let (ra, rb) = (find(&mut parent, l.a), find(&mut parent, l.b));
             if ra != rb {
                 parent[ra.max(rb)] = ra.min(rb);
@@ -544,13 +563,94 @@ struct Segments {
     /// Per segment, whether it is measured static world: on the ego-motion, with at least
     /// [`ScaleParams::measured_share`] of its pieces well measured (`world_pieces`).
     measured: Vec<bool>,
+    /// The ground, where one is in view.
+    ground: Option<Ground>,
+}
+
+/// The static world's ground plane as the segment solve sees it.
+struct Ground {
+    /// The segment whose pieces carry it (the static world's).
+    segment: usize,
+    /// Per piece, how far it lies under the ground at equal scales
+    /// ([`ground::depth_below_ground`]); `None` for pieces above the horizon.
+    below: Vec<Option<f64>>,
+}
+
+impl Ground {
+    /// The ground of `soup`: the plane of the largest segment on the ego-motion, fitted to its
+    /// well-measured ground-like pieces (`world`), if they cover enough of the image.
+    fn find(
+        soup: &Soup,
+        inputs: &ScaleInputs,
+        segment: &[usize],
+        ego: &[bool],
+        sizes: &[usize],
+        world: &[bool],
+        params: &ScaleParams,
+    ) -> Option<Ground> {
+        let g = (0..sizes.len())
+            .filter(|&g| ego[g])
+            .max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)))?;
+        let candidates: Vec<bool> = (0..soup.pieces.len())
+            .map(|i| segment[i] == g && world[i])
+            .collect();
+        let (superpixels, intrinsics) = (inputs.superpixels, inputs.intrinsics);
+        let plane = ground::ground_plane(
+            soup,
+            superpixels,
+            intrinsics,
+            &candidates,
+            params.ground_share,
+        )?;
+        let below = (0..soup.pieces.len())
+            .map(|i| ground::depth_below_ground(soup, superpixels, intrinsics, &plane, i))
+            .collect();
+        Some(Ground { segment: g, below })
+    }
 }
 
 impl Segments {
     /// The segments of `soup` at equal scales ([`rigid_segments`] at s = 0).
+    ///
+    /// Pieces on the ego-motion that lie more than `world_gap` under the ground of the static
+    /// world at its scale are not static: a mover that the ego-motion explains at a wrong, larger
+    /// depth (a car driving ahead, seen near the epipole) sinks under the road. Such pieces join
+    /// only each other, so the segments are built a second time without them in the world. Pieces
+    /// touching the image's border are not split off: their flow (pixels leaving the view) and
+    /// planes are the least reliable, and on the crowd the floor's border pieces read 0.2–0.5
+    /// under its own ground.
     fn new(soup: &Soup, inputs: &ScaleInputs, problem: &Problem, params: &ScaleParams) -> Self {
+        let first = Self::built(soup, inputs, problem, params, None);
+        let Some(ground) = first.ground.as_ref() else {
+            return first;
+        };
+        let labels = &inputs.superpixels.labels;
+        let (width, height) = (labels.width() as u32, labels.height() as u32);
+        let sunk: Vec<bool> = (soup.pieces.iter().zip(&ground.below))
+            .zip(&inputs.superpixels.segments)
+            .map(|((piece, below), seg)| {
+                let [x0, y0, x1, y1] = seg.bbox;
+                let border = x0 == 0 || y0 == 0 || x1 + 1 >= width || y1 + 1 >= height;
+                piece.hypothesis == 0 && !border && below.is_some_and(|b| b > params.world_gap)
+            })
+            .collect();
+        if sunk.iter().any(|&x| x) {
+            Self::built(soup, inputs, problem, params, Some(&sunk))
+        } else {
+            first
+        }
+    }
+
+    /// The segments with the pieces of `apart` joining only each other ([`rigid_segments`]).
+    fn built(
+        soup: &Soup,
+        inputs: &ScaleInputs,
+        problem: &Problem,
+        params: &ScaleParams,
+        apart: Option<&[bool]>,
+    ) -> Self {
         let zero = vec![0.0; soup.pieces.len()];
-        let (segment, sizes) = rigid_segments(soup, inputs, problem, &zero, params);
+        let (segment, sizes) = rigid_segments(soup, inputs, problem, &zero, params, apart);
         let centre = segment_centres(soup, inputs, &segment, sizes.len());
         let mut ego = vec![false; sizes.len()];
         for (piece, &g) in soup.pieces.iter().zip(&segment) {
@@ -564,12 +664,16 @@ impl Segments {
         let measured = (0..sizes.len())
             .map(|g| ego[g] && well_measured[g] as f64 >= params.measured_share * sizes[g] as f64)
             .collect();
+        let ground = (params.ground_weight > 0.0)
+            .then(|| Ground::find(soup, inputs, &segment, &ego, &sizes, &world, params))
+            .flatten();
         Segments {
             segment,
             sizes,
             centre,
             ego,
             measured,
+            ground,
         }
     }
 
@@ -659,6 +763,8 @@ pub struct SegmentObjective {
     pub contacts: f64,
     /// The figure prior.
     pub figure: f64,
+    /// The ground prior.
+    pub ground: f64,
 }
 
 /// [`SegmentObjective`] of `s` for `soup` (unit scale).
@@ -676,10 +782,12 @@ pub fn segment_objective(
     let mut out = SegmentObjective {
         contacts: 0.0,
         figure: 0.0,
+        ground: 0.0,
     };
     for (&(g, h), pair) in &pairs {
         out.contacts += truncated(&pair.terms, u[g] - u[h], sigma);
         out.figure += steps_at(&pair.behind, u[g] - u[h], sigma);
+        out.ground += steps_at(&pair.under, u[g] - u[h], sigma);
     }
     out
 }
@@ -813,7 +921,7 @@ fn solve_segments(
                 (-1.0, u[key.0])
             };
             terms.extend(pair.terms.iter().map(|&(w, c)| (w, sign * c - other)));
-            steps.extend(pair.behind.iter().map(|st| Step {
+            steps.extend(pair.steps().map(|st| Step {
                 k: st.k,
                 c: sign * st.c - other,
                 dir: sign * st.dir,
@@ -873,11 +981,22 @@ struct Pair {
     /// larger one, where the weighted median of the link's frame-1 gaps puts it more than σ
     /// behind (empty with a zero [`ScaleParams::behind_weight`]).
     behind: Vec<Step>,
+    /// The ground prior, one step per piece of either segment that the other one's ground
+    /// plane is under: its cost for lying more than σ under the ground
+    /// ([`ScaleParams::ground_weight`]).
+    under: Vec<Step>,
 }
 
 impl Pair {
     fn value(&self, d: f64, sigma: f64) -> f64 {
-        truncated(&self.terms, d, sigma) + steps_at(&self.behind, d, sigma)
+        truncated(&self.terms, d, sigma)
+            + steps_at(&self.behind, d, sigma)
+            + steps_at(&self.under, d, sigma)
+    }
+
+    /// Both priors' steps.
+    fn steps(&self) -> impl Iterator<Item = &Step> {
+        self.behind.iter().chain(&self.under)
     }
 }
 
@@ -929,8 +1048,40 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
             });
         }
     }
+    add_ground_prior(&mut pairs, segments, params.ground_weight * problem.sigma);
     add_static_prior(&mut pairs, segments, params.static_weight);
     pairs
+}
+
+/// The ground prior: every piece outside the ground's segment whose rays meet the ground pays
+/// `k` where its segment's offset puts it (the median of its pixels) more than σ under the
+/// ground.
+fn add_ground_prior(pairs: &mut PairTerms, segments: &Segments, k: f64) {
+    let Some(ground) = segments.ground.as_ref().filter(|_| k > 0.0) else {
+        return;
+    };
+    let w = ground.segment;
+    for (&g, below) in segments.segment.iter().zip(&ground.below) {
+        let Some(below) = below.filter(|_| g != w) else {
+            continue;
+        };
+        // ln z_piece − ln z_ground = (u_g − u_w) + (centre_g − centre_w) + below.
+        let c = segments.centre[g] - segments.centre[w] + below;
+        let (key, step) = if g < w {
+            ((g, w), Step { k, c, dir: 1.0 })
+        } else {
+            // d = u_w − u_g: under the ground when −(d − c) > σ.
+            (
+                (w, g),
+                Step {
+                    k,
+                    c: -c,
+                    dir: -1.0,
+                },
+            )
+        };
+        pairs.entry(key).or_default().under.push(step);
+    }
 }
 
 /// The static prior: every segment on the ego-motion but the largest (the static world) is
@@ -1300,7 +1451,7 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
     let n = soup.pieces.len();
     let problem = build_problem(soup, inputs, params);
     let s: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
-    let (segment, sizes) = rigid_segments(soup, inputs, &problem, &s, params);
+    let (segment, sizes) = rigid_segments(soup, inputs, &problem, &s, params, None);
     let largest = (0..sizes.len()).max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
     let step = 1.25f64.ln();
     // Per segment: energy of its rim at offsets −step, 0, +step, and the rim's full weight.
@@ -1421,6 +1572,7 @@ mod tests {
             centre: centre.to_vec(),
             ego: ego.to_vec(),
             measured: ego.to_vec(),
+            ground: None,
         }
     }
 
@@ -1460,6 +1612,73 @@ mod tests {
         };
         assert!((solve(0.0) - 1.0).abs() < 1e-9, "{}", solve(0.0));
         assert!((solve(1.0) + 0.3).abs() < 1e-9, "{}", solve(1.0));
+    }
+
+    #[test]
+    fn the_ground_prior_lifts_a_sunk_segment_onto_the_ground_from_either_side() {
+        // A mover (one piece) touches the world (three pieces) twice: it meets the far
+        // background at δ = s_mover − s_world = 1 (weight 0.5) and the road at δ = 0 (0.3).
+        // Contacts alone glue it to the background; there its median pixel lies δ − 0.5 under
+        // the road, more than σ, and the ground prior (one broken contact) lifts it onto the
+        // road. The mover is the first segment or the second, with non-zero centres.
+        let link = |a, b, w, c: f64| Link {
+            a,
+            b,
+            terms: vec![(w, c)],
+            frame1: vec![(w, c)],
+            median_c1: c,
+            flow_jump: 0.0,
+        };
+        for mover in [0usize, 3] {
+            let world: Vec<usize> = (0..4).filter(|&i| i != mover).collect();
+            // Seen from the mover (a = mover): gap = δ + c.
+            let problem = Problem {
+                links: vec![
+                    link(world[0], world[1], 1.0, 0.0),
+                    link(world[1], world[2], 1.0, 0.0),
+                    link(mover, world[0], 0.5, -1.0),
+                    link(mover, world[1], 0.3, 0.0),
+                ],
+                touching: (0..4)
+                    .map(|i| match i {
+                        i if i == mover => vec![2, 3],
+                        i if i == world[0] => vec![0, 2],
+                        i if i == world[1] => vec![0, 1, 3],
+                        _ => vec![1],
+                    })
+                    .collect(),
+                sigma: 0.1,
+            };
+            let segment: Vec<usize> = (0..4)
+                .map(|i| usize::from((i == mover) == (mover == 3)))
+                .collect();
+            let (g_mover, g_world) = (segment[mover], segment[world[0]]);
+            let mut centre = [0.0; 2];
+            centre[g_mover] = -0.2;
+            centre[g_world] = 0.7;
+            let placement = |ground_weight: f64| {
+                let params = ScaleParams {
+                    behind_weight: 0.0,
+                    ground_weight,
+                    ..ScaleParams::default()
+                };
+                let mut ego = [false; 2];
+                ego[g_world] = true;
+                let mut segments = segments_of(&segment, &centre, &ego);
+                let mut below = vec![None; 4];
+                below[mover] = Some(-0.5);
+                segments.ground = Some(Ground {
+                    segment: g_world,
+                    below,
+                });
+                let u = solve_segments(&problem, &segments, &params, None).0;
+                (centre[g_mover] + u[g_mover]) - (centre[g_world] + u[g_world])
+            };
+            let glued = placement(0.0);
+            assert!((glued - 1.0).abs() < 1e-9, "mover {mover}: {glued}");
+            let lifted = placement(1.0);
+            assert!(lifted.abs() < 1e-9, "mover {mover}: {lifted}");
+        }
     }
 
     #[test]

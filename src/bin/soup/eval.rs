@@ -324,7 +324,9 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
         soup
     };
     println!("truth test of {}:", case.name);
-    println!("| energy | state | E | segment solve: contacts + figure prior | MRE |");
+    println!(
+        "| energy | state | E | segment solve: contacts + figure prior + ground prior | MRE |"
+    );
     println!("| --- | --- | --- | --- | --- |");
     // The scale energy over per-piece log-scales of the unit-scale soup's planes and motions.
     let problem = scales::build_problem(&rec.unit_soup, &inputs, &params.scales);
@@ -345,10 +347,11 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     ] {
         let segments = scales::segment_objective(&rec.unit_soup, &inputs, &params.scales, s);
         println!(
-            "| scales | {name} | {:.3} | {:.3} + {:.3} | {:.4} |",
+            "| scales | {name} | {:.3} | {:.3} + {:.3} + {:.3} | {:.4} |",
             problem.energy(s),
             segments.contacts,
             segments.figure,
+            segments.ground,
             mre_of(&at(s))?
         );
     }

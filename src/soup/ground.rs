@@ -1,0 +1,269 @@
+//! The ground: the plane of the static world's floor, and how far a piece would lie under it.
+//!
+//! Things stand on the ground or above it; none is seen through it. So a pixel whose ray meets
+//! the ground plane in front of the camera cannot be farther than the ground along that ray,
+//! whatever moves. Two frames often leave a mover's scale free (a car driving ahead of the camera
+//! is explained by the camera's own motion at a wrong, larger depth, and its contacts then glue
+//! it to the far background), but placed too far it sinks under the road: this module measures
+//! how far, and the scale solve ([`super::scales`]) charges for it.
+//!
+//! Conventions (docs/ARCHITECTURE.md): camera 1's frame, y down, a plane mᵀX = 1 at unit scale,
+//! so a floor below the camera has m pointing down (m_y > 0) and meets the rays below its
+//! horizon (mᵀx̄ > 0). Log-depths compare pieces at equal scale; the scale solve adds the
+//! difference of their log-scales.
+
+use nalgebra::{Matrix3, Vector3};
+
+use super::Soup;
+use crate::camera::Intrinsics;
+use crate::superpixels::Superpixels;
+
+/// A plane counts as ground-like when its normal is within this angle of the camera's downward
+/// axis (30°: floors and roads seen from a camera held roughly level, or tilted by up to 30°).
+const GROUND_TILT_DEG: f64 = 30.0;
+
+/// Two pieces lie on one ground plane when their anchors' log-depths differ by less than this
+/// under it (5 %: the noise of well-measured planes, well below a kerb or a step).
+const ON_PLANE_LOG_GAP: f64 = 0.05;
+
+/// Every how many pixels of a piece the fit and the depth test look at (a superpixel has
+/// hundreds; every fourth keeps the shape and costs a quarter).
+const PIXEL_STRIDE: usize = 4;
+
+/// The share of a piece's tested pixels that may lie deeper under the ground than its reported
+/// depth below it. Half: a superpixel that straddles a thing's contact with the ground has
+/// pixels of the ground below the contact line, where the thing's plane runs under the ground
+/// (on the road, the 90th percentile put a car resting on it 0.28 under it at the truth), and a
+/// piece's plane is least reliable at its far corners (small pieces near the horizon reached
+/// 1–3 in log-depth under it there).
+const BELOW_QUANTILE: f64 = 0.5;
+
+/// The ground plane of `soup`'s static world: among the `candidates` (pieces of one rigid
+/// segment, so their unit-scale planes share a scale), those with a ground-like plane vote for
+/// each other's planes by pixels; the plane with the most pixels within [`ON_PLANE_LOG_GAP`] is
+/// refitted to its voters' surface points twice. `None` when its pieces cover less than
+/// `min_share` of the image (no floor worth trusting is in view).
+///
+/// Returns m at the candidates' unit scale: depth z = 1 / (mᵀx̄).
+pub fn ground_plane(
+    soup: &Soup,
+    superpixels: &Superpixels,
+    intrinsics: &Intrinsics,
+    candidates: &[bool],
+    min_share: f64,
+) -> Option<Vector3<f64>> {
+    let ray = |[u, v]: [f64; 2]| Vector3::from(intrinsics.ray(u, v));
+    let cos_tilt = GROUND_TILT_DEG.to_radians().cos();
+    // (piece, anchor ray) of every ground-like candidate.
+    let ground_like: Vec<(usize, Vector3<f64>)> = soup
+        .pieces
+        .iter()
+        .enumerate()
+        .filter(|&(i, p)| candidates[i] && p.degenerate.is_none() && p.m.y > cos_tilt * p.m.norm())
+        .map(|(i, _)| (i, ray(superpixels.segments[i].anchor)))
+        .filter(|&(i, r)| soup.pieces[i].m.dot(&r) > 0.0)
+        .collect();
+    let on_plane = |m: &Vector3<f64>| -> Vec<usize> {
+        ground_like
+            .iter()
+            .filter(|&&(i, r)| {
+                let (a, b) = (m.dot(&r), soup.pieces[i].m.dot(&r));
+                a > 0.0 && (a.ln() - b.ln()).abs() < ON_PLANE_LOG_GAP
+            })
+            .map(|&(i, _)| i)
+            .collect()
+    };
+    let pixels_of = |pieces: &[usize]| -> f64 {
+        pieces
+            .iter()
+            .map(|&i| superpixels.segments[i].pixels.len() as f64)
+            .sum()
+    };
+    let (_, mut m) = ground_like
+        .iter()
+        .map(|&(i, _)| (pixels_of(&on_plane(&soup.pieces[i].m)), soup.pieces[i].m))
+        .max_by(|a, b| a.0.total_cmp(&b.0))?;
+    for _ in 0..2 {
+        m = fit_plane(soup, superpixels, intrinsics, &on_plane(&m))?;
+    }
+    let total = superpixels.labels.width() * superpixels.labels.height();
+    let share = pixels_of(&on_plane(&m)) / total.max(1) as f64;
+    (share >= min_share && m.y > cos_tilt * m.norm()).then_some(m)
+}
+
+/// The least-squares plane mᵀX = 1 through the unit-scale surface points of `pieces` (each
+/// pixel on its own piece's plane, every [`PIXEL_STRIDE`]-th): Σ X Xᵀ m = Σ X. `None` without
+/// a well-posed fit.
+fn fit_plane(
+    soup: &Soup,
+    superpixels: &Superpixels,
+    intrinsics: &Intrinsics,
+    pieces: &[usize],
+) -> Option<Vector3<f64>> {
+    let width = superpixels.labels.width();
+    let (mut xtx, mut xt1) = (Matrix3::zeros(), Vector3::zeros());
+    for &i in pieces {
+        let m = soup.pieces[i].m;
+        for &p in superpixels.segments[i].pixels.iter().step_by(PIXEL_STRIDE) {
+            let p = p as usize;
+            let r = Vector3::from(intrinsics.ray((p % width) as f64, (p / width) as f64));
+            let inv = m.dot(&r);
+            if inv > 0.0 {
+                let x = r / inv;
+                xtx += x * x.transpose();
+                xt1 += x;
+            }
+        }
+    }
+    let m = xtx.try_inverse()? * xt1;
+    m.iter().all(|v| v.is_finite()).then_some(m)
+}
+
+/// How far piece `i` lies under the ground at equal scale: the [`BELOW_QUANTILE`] quantile,
+/// over its pixels whose rays meet the ground ahead, of ln z̄_i − ln z̄_G (unit-scale depths of
+/// the piece's plane and of `ground`). The piece at log-scale s_i lies that much plus
+/// s_i − s_G below the ground at its lowest part (positive: under it). `None` when none of its
+/// rays meets both planes in front of the camera (above the horizon).
+pub fn depth_below_ground(
+    soup: &Soup,
+    superpixels: &Superpixels,
+    intrinsics: &Intrinsics,
+    ground: &Vector3<f64>,
+    i: usize,
+) -> Option<f64> {
+    let width = superpixels.labels.width();
+    let m = soup.pieces[i].m;
+    let mut below: Vec<f64> = superpixels.segments[i]
+        .pixels
+        .iter()
+        .step_by(PIXEL_STRIDE)
+        .filter_map(|&p| {
+            let p = p as usize;
+            let r = Vector3::from(intrinsics.ray((p % width) as f64, (p / width) as f64));
+            let (g, own) = (ground.dot(&r), m.dot(&r));
+            (g > 0.0 && own > 0.0).then(|| g.ln() - own.ln())
+        })
+        .collect();
+    if below.is_empty() {
+        return None;
+    }
+    below.sort_by(f64::total_cmp);
+    let k = ((below.len() - 1) as f64 * BELOW_QUANTILE).round() as usize;
+    Some(below[k])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grid::Grid;
+    use crate::soup::Piece;
+    use crate::superpixels::Segment;
+
+    const K: Intrinsics = Intrinsics {
+        fx: 100.0,
+        fy: 100.0,
+        cx: 49.5,
+        cy: 49.5,
+    };
+
+    /// Floor y = 2 (m = (0, ½, 0)): nothing, seen on the ray through pixel row v, lies deeper
+    /// than 2 / ((v − cy) / fy) there.
+    const FLOOR: Vector3<f64> = Vector3::new(0.0, 0.5, 0.0);
+
+    /// A 100 × 100 image cut into 10 × 10-pixel superpixels; the rows of superpixels from
+    /// `floor_from` down are on the floor, the rest on the wall z = 10 (m = (0, 0, 0.1)), all on
+    /// the static world's motion (hypothesis 0), at one scale.
+    fn room(floor_from: u32) -> (Soup, Superpixels) {
+        let labels = Grid::from_fn(100, 100, |x, y| ((y / 10) * 10 + x / 10) as u32);
+        let mut segments = Vec::new();
+        let mut pieces = Vec::new();
+        for j in 0..10u32 {
+            for i in 0..10u32 {
+                let pixels = (0..100u32)
+                    .map(|p| (10 * j + p / 10) * 100 + 10 * i + p % 10)
+                    .collect();
+                segments.push(Segment {
+                    pixels,
+                    anchor: [4.5 + 10.0 * i as f64, 4.5 + 10.0 * j as f64],
+                    mean_lab: [0.0; 3],
+                    mean_rgb: [0; 3],
+                    bbox: [10 * i, 10 * j, 10 * i + 9, 10 * j + 9],
+                });
+                let m = if j >= floor_from {
+                    FLOOR
+                } else {
+                    Vector3::new(0.0, 0.0, 0.1)
+                };
+                pieces.push(Piece {
+                    r: Matrix3::identity(),
+                    t_hat: Vector3::new(1.0, 0.0, 0.0),
+                    m,
+                    lambda: 1.0,
+                    hypothesis: 0,
+                    degenerate: None,
+                });
+            }
+        }
+        let soup = Soup {
+            pieces,
+            hypotheses: Vec::new(),
+            noise_px: 0.0,
+        };
+        (soup, Superpixels { labels, segments })
+    }
+
+    #[test]
+    fn the_floor_is_found_where_it_covers_enough_of_the_image() {
+        let (soup, sp) = room(6);
+        let all = vec![true; soup.pieces.len()];
+        let m = ground_plane(&soup, &sp, &K, &all, 0.3).expect("a floor of 40 %");
+        assert!((m - FLOOR).norm() < 1e-9, "{m}");
+        // 40 % of the image is not enough where half is asked for.
+        assert_eq!(ground_plane(&soup, &sp, &K, &all, 0.5), None);
+        // Only the candidates vote: without the floor's pieces there is no ground.
+        let walls: Vec<bool> = soup.pieces.iter().map(|p| p.m != FLOOR).collect();
+        assert_eq!(ground_plane(&soup, &sp, &K, &walls, 0.01), None);
+    }
+
+    #[test]
+    fn a_floor_tilted_within_thirty_degrees_counts_and_a_wall_does_not() {
+        for (deg, found) in [(25.0f64, true), (35.0, false)] {
+            let (mut soup, sp) = room(6);
+            let a = deg.to_radians();
+            // The floor's normal turned by `a` about the camera's x axis, 2 below the camera.
+            let tilted = Vector3::new(0.0, a.cos(), a.sin()) / 2.0;
+            for p in soup.pieces.iter_mut().filter(|p| p.m == FLOOR) {
+                p.m = tilted;
+            }
+            let all = vec![true; soup.pieces.len()];
+            let m = ground_plane(&soup, &sp, &K, &all, 0.1);
+            assert_eq!(m.is_some(), found, "{deg}°: {m:?}");
+            if let Some(m) = m {
+                assert!((m - tilted).norm() < 1e-9);
+            }
+        }
+    }
+
+    #[test]
+    fn the_depth_below_ground_is_the_log_ratio_at_the_median_pixel() {
+        let (soup, sp) = room(6);
+        // A piece of the floor lies on it.
+        let floor_piece = 7 * 10 + 3;
+        let on = depth_below_ground(&soup, &sp, &K, &FLOOR, floor_piece).unwrap();
+        assert!(on.abs() < 1e-12, "{on}");
+        // A wall piece in the floor's rows (the wall z = 10 continued below the horizon) lies
+        // under the floor. Its tested pixels are every fourth of rows 70–79, the median one in
+        // row 74, whose ray meets the floor at depth 2 / ((74 − 49.5) / 100) ≈ 8.16: under it
+        // by ln(10 / 8.16).
+        let (mut sunk, _) = room(6);
+        sunk.pieces[floor_piece].m = Vector3::new(0.0, 0.0, 0.1);
+        let below = depth_below_ground(&sunk, &sp, &K, &FLOOR, floor_piece).unwrap();
+        let expected = (10.0 * 0.5 * (74.0 - 49.5) / 100.0f64).ln();
+        assert!(
+            (below - expected).abs() < 1e-9,
+            "{below} against {expected}"
+        );
+        // Above the horizon no ray meets the floor.
+        assert_eq!(depth_below_ground(&soup, &sp, &K, &FLOOR, 2 * 10 + 3), None);
+    }
+}
