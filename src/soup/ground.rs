@@ -40,9 +40,9 @@ const BELOW_QUANTILE: f64 = 0.5;
 
 /// The ground plane of `soup`'s static world: among the `candidates` (pieces of one rigid
 /// segment, so their unit-scale planes share a scale), those with a ground-like plane vote for
-/// each other's planes by pixels; the plane with the most pixels within [`ON_PLANE_LOG_GAP`] is
-/// refitted to its voters' surface points twice. `None` when its pieces cover less than
-/// `min_share` of the image (no floor worth trusting is in view).
+/// each other's planes by pixels; the plane with the most pixels within 5 % in depth
+/// (`ON_PLANE_LOG_GAP`) is refitted to its voters' surface points twice. `None` when its
+/// pieces cover less than `min_share` of the image (no floor worth trusting is in view).
 ///
 /// Returns m at the candidates' unit scale: depth z = 1 / (mᵀx̄).
 pub fn ground_plane(
@@ -119,11 +119,11 @@ fn fit_plane(
     m.iter().all(|v| v.is_finite()).then_some(m)
 }
 
-/// How far piece `i` lies under the ground at equal scale: the [`BELOW_QUANTILE`] quantile,
+/// How far piece `i` lies under the ground at equal scale: the median (`BELOW_QUANTILE`),
 /// over its pixels whose rays meet the ground ahead, of ln z̄_i − ln z̄_G (unit-scale depths of
-/// the piece's plane and of `ground`). The piece at log-scale s_i lies that much plus
-/// s_i − s_G below the ground at its lowest part (positive: under it). `None` when none of its
-/// rays meets both planes in front of the camera (above the horizon).
+/// the piece's plane and of `ground`). At log-scale s_i the piece lies that much plus s_i − s_G
+/// under the ground (positive: under it). `None` when none of its rays meets both planes in
+/// front of the camera (above the horizon).
 pub fn depth_below_ground(
     soup: &Soup,
     superpixels: &Superpixels,

@@ -38,7 +38,9 @@
 //!    it). They do not join unconditionally: a walker moving parallel to the camera's
 //!    translation is explained by the ego-motion too, at a wrong depth, and there it does not
 //!    meet the world (on the crowd with exact flow, two walkers were glued to the world and
-//!    the MRE was 0.14–0.20).
+//!    the MRE was 0.14–0.20). Nor do pieces that sink under the static world's ground
+//!    ([`super::ground`]): those are movers explained by the ego-motion at too large a depth
+//!    (a car driving ahead), so the segments are built a second time with them apart.
 //! 2. *Segment scales* by coordinate descent on E from three starts (a maximum spanning tree of
 //!    the sharpest links; every segment at median depth 1; and TRW-S over offsets on a grid of
 //!    step σ, which moves groups of segments together), each segment moving to the exact
@@ -55,13 +57,14 @@
 //!    crowd's truth it charged such fragments 18–35 contact units, and the solve placed whole
 //!    walkers 2–4× wrong to spare them. A weak *static prior* (`static_weight`) ties every
 //!    segment on the ego-motion to the static world's scale instead: the ego-motion explains
-//!    its flow at exactly that scale.
+//!    its flow at exactly that scale. A *ground prior* (`ground_weight`) charges every piece
+//!    outside the static world one broken contact for lying more than σ under its ground.
 //! 3. *Tail control.* A piece whose depth disagrees with every neighbour in both frames while
 //!    the flow across its boundary is continuous (nothing in the data justifies the depth edge)
 //!    takes the scale that best meets its neighbours. The number of such pieces is reported.
 //!
-//! E is [`Problem::energy`], the contact energy alone (without the figure prior, which acts only
-//! between segments in step 2); `soup eval --oracle` compares it at the solution and at the
+//! E is [`Problem::energy`], the contact energy alone (without the figure, static and ground
+//! priors, which act only between segments in step 2); `soup eval --oracle` compares it at the solution and at the
 //! ground truth polished by the same per-piece descent (the "truth test").
 
 use nalgebra::Vector3;
@@ -127,10 +130,14 @@ pub struct ScaleParams {
     /// this median log-depth gap at the world's scale: looser than `segment_gap`, since their
     /// depth is well measured and a larger gap is the flow's error near edges (0.2 = 2σ, a
     /// depth jump of 22 %). Not unconditional: a mover whose motion parallels the camera's is
-    /// explained by the ego-motion at a wrong depth and does not meet the world there. A piece
-    /// on the ego-motion that lies more than this under the ground at the world's scale is not
-    /// static world at all (it sank: see `Segments::new`).
+    /// explained by the ego-motion at a wrong depth and does not meet the world there.
     pub world_gap: f64,
+    /// A piece on the ego-motion that lies more than this (log-depth, by the median of its
+    /// pixels) under the static world's ground at the world's scale is not static world: a
+    /// mover explained by the ego-motion at too large a depth (see `Segments::new`). 0.2: above
+    /// the 0.1–0.2 that pieces straddling a contact with the floor read at the truth, below
+    /// the road's cars (0.7–1.1).
+    pub sunk_gap: f64,
     /// The static prior: each segment on the ego-motion is tied to the static world's scale
     /// as if by this many contacts per piece (each at most σ). Weak: 0.05 gives a segment of
     /// 20 pieces the pull of one full contact, so contacts overrule it wherever they agree
@@ -145,7 +152,7 @@ pub struct ScaleParams {
     /// The ground prior: each piece outside the static world that lies (by the median of its
     /// pixels) more than σ under the ground plane (see `soup::ground`: nothing is seen through
     /// the floor) costs this many broken contacts (w σ); 0 switches the ground off altogether
-    /// (also the split of sunk pieces from the static world, see `world_gap`). 1: a mover of n pieces sunk under the road pays as
+    /// (also the split of sunk pieces from the static world, see `sunk_gap`). 1: a mover of n pieces sunk under the road pays as
     /// much as n broken contacts, more than the contacts that glued it to the background
     /// behind it usually save.
     pub ground_weight: f64,
@@ -170,6 +177,7 @@ impl Default for ScaleParams {
             behind_weight: 10.0,
             world_parallax: 30.0,
             world_gap: 0.2,
+            sunk_gap: 0.2,
             static_weight: 0.05,
             measured_share: 0.5,
             ground_weight: 1.0,
@@ -558,122 +566,104 @@ struct Segments {
     sizes: Vec<usize>,
     /// Per segment, the log-scale that puts it at median depth 1 (see `segment_centres`).
     centre: Vec<f64>,
-    /// Per segment, whether it is on the ego-motion (hypothesis 0): a part of the static world.
+    /// Per segment, whether it is on the ego-motion (hypothesis 0) and not sunk under the
+    /// ground: a part of the static world.
     ego: Vec<bool>,
     /// Per segment, whether it is measured static world: on the ego-motion, with at least
     /// [`ScaleParams::measured_share`] of its pieces well measured (`world_pieces`).
     measured: Vec<bool>,
-    /// The ground, where one is in view.
-    ground: Option<Ground>,
-}
-
-/// The static world's ground plane as the segment solve sees it.
-struct Ground {
-    /// The segment whose pieces carry it (the static world's).
-    segment: usize,
-    /// Per piece, how far it lies under the ground at equal scales
-    /// ([`ground::depth_below_ground`]); `None` for pieces above the horizon.
+    /// The static world's segment: the largest on the ego-motion.
+    world: Option<usize>,
+    /// Per piece, how far it lies under the static world's ground at equal scales
+    /// ([`ground::depth_below_ground`]); `None` for pieces above the horizon, and for every
+    /// piece when no ground is in view.
     below: Vec<Option<f64>>,
 }
 
-impl Ground {
-    /// The ground of `soup`: the plane of the largest segment on the ego-motion, fitted to its
-    /// well-measured ground-like pieces (`world`), if they cover enough of the image.
-    fn find(
-        soup: &Soup,
-        inputs: &ScaleInputs,
-        segment: &[usize],
-        ego: &[bool],
-        sizes: &[usize],
-        world: &[bool],
-        params: &ScaleParams,
-    ) -> Option<Ground> {
-        let g = (0..sizes.len())
-            .filter(|&g| ego[g])
-            .max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)))?;
-        let candidates: Vec<bool> = (0..soup.pieces.len())
-            .map(|i| segment[i] == g && world[i])
-            .collect();
-        let (superpixels, intrinsics) = (inputs.superpixels, inputs.intrinsics);
-        let plane = ground::ground_plane(
-            soup,
-            superpixels,
-            intrinsics,
-            &candidates,
-            params.ground_share,
-        )?;
-        let below = (0..soup.pieces.len())
-            .map(|i| ground::depth_below_ground(soup, superpixels, intrinsics, &plane, i))
-            .collect();
-        Some(Ground { segment: g, below })
-    }
+/// The static world's segment: the largest on the ego-motion (the earlier one on a tie).
+fn static_world(sizes: &[usize], ego: &[bool]) -> Option<usize> {
+    (0..sizes.len())
+        .filter(|&g| ego[g])
+        .max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)))
+}
+
+/// Per piece, how far it lies under the static world's ground at equal scales (see
+/// `Segments::below`): the ground is fitted to the well-measured pieces of the static world
+/// (`world_piece`), which share the ego-motion's unit scale whatever segment they end in.
+/// Pieces without a plane of their own count too: near the epipole a car driving ahead has too
+/// little parallax for one, and its borrowed camera-facing planes are what sinks (leaving them
+/// out took the road with exact flow from 0.048 to 0.061). All `None` without a ground in view or with a zero [`ScaleParams::ground_weight`].
+fn ground_below(
+    soup: &Soup,
+    inputs: &ScaleInputs,
+    world_piece: &[bool],
+    params: &ScaleParams,
+) -> Vec<Option<f64>> {
+    let (superpixels, intrinsics) = (inputs.superpixels, inputs.intrinsics);
+    let plane = (params.ground_weight > 0.0)
+        .then(|| {
+            ground::ground_plane(
+                soup,
+                superpixels,
+                intrinsics,
+                world_piece,
+                params.ground_share,
+            )
+        })
+        .flatten();
+    (0..soup.pieces.len())
+        .map(|i| {
+            plane.and_then(|m| ground::depth_below_ground(soup, superpixels, intrinsics, &m, i))
+        })
+        .collect()
 }
 
 impl Segments {
     /// The segments of `soup` at equal scales ([`rigid_segments`] at s = 0).
     ///
-    /// Pieces on the ego-motion that lie more than `world_gap` under the ground of the static
-    /// world at its scale are not static: a mover that the ego-motion explains at a wrong, larger
-    /// depth (a car driving ahead, seen near the epipole) sinks under the road. Such pieces join
-    /// only each other, so the segments are built a second time without them in the world. Pieces
-    /// touching the image's border are not split off: their flow (pixels leaving the view) and
-    /// planes are the least reliable, and on the crowd the floor's border pieces read 0.2–0.5
-    /// under its own ground.
+    /// Pieces on the ego-motion that lie more than [`ScaleParams::sunk_gap`] under the ground
+    /// of the static world at its scale are not static: a mover that the ego-motion explains
+    /// at a wrong, larger depth (a car driving ahead, seen near the epipole) sinks under the
+    /// road. Such pieces join only each other and their segments are movers (no static prior,
+    /// no exemption from the figure prior). Pieces touching the image's border are not split
+    /// off: their flow (pixels leaving the view) and planes are the least reliable, and on the
+    /// crowd the floor's border pieces read 0.2–0.5 under its own ground.
     fn new(soup: &Soup, inputs: &ScaleInputs, problem: &Problem, params: &ScaleParams) -> Self {
-        let first = Self::built(soup, inputs, problem, params, None);
-        let Some(ground) = first.ground.as_ref() else {
-            return first;
-        };
+        let n = soup.pieces.len();
+        let world_piece = world_pieces(soup, inputs, params.world_parallax);
+        let below = ground_below(soup, inputs, &world_piece, params);
         let labels = &inputs.superpixels.labels;
         let (width, height) = (labels.width() as u32, labels.height() as u32);
-        let sunk: Vec<bool> = (soup.pieces.iter().zip(&ground.below))
+        let sunk: Vec<bool> = (soup.pieces.iter().zip(&below))
             .zip(&inputs.superpixels.segments)
             .map(|((piece, below), seg)| {
                 let [x0, y0, x1, y1] = seg.bbox;
                 let border = x0 == 0 || y0 == 0 || x1 + 1 >= width || y1 + 1 >= height;
-                piece.hypothesis == 0 && !border && below.is_some_and(|b| b > params.world_gap)
+                piece.hypothesis == 0 && !border && below.is_some_and(|b| b > params.sunk_gap)
             })
             .collect();
-        if sunk.iter().any(|&x| x) {
-            Self::built(soup, inputs, problem, params, Some(&sunk))
-        } else {
-            first
-        }
-    }
-
-    /// The segments with the pieces of `apart` joining only each other ([`rigid_segments`]).
-    fn built(
-        soup: &Soup,
-        inputs: &ScaleInputs,
-        problem: &Problem,
-        params: &ScaleParams,
-        apart: Option<&[bool]>,
-    ) -> Self {
-        let zero = vec![0.0; soup.pieces.len()];
-        let (segment, sizes) = rigid_segments(soup, inputs, problem, &zero, params, apart);
+        let zero = vec![0.0; n];
+        let (segment, sizes) = rigid_segments(soup, inputs, problem, &zero, params, Some(&sunk));
         let centre = segment_centres(soup, inputs, &segment, sizes.len());
+        // Segments are of one hypothesis and one side of the split each.
         let mut ego = vec![false; sizes.len()];
-        for (piece, &g) in soup.pieces.iter().zip(&segment) {
-            ego[g] = piece.hypothesis == 0;
-        }
-        let world = world_pieces(soup, inputs, params.world_parallax);
         let mut well_measured = vec![0usize; sizes.len()];
-        for (&w, &g) in world.iter().zip(&segment) {
-            well_measured[g] += usize::from(w);
+        for i in 0..n {
+            ego[segment[i]] = soup.pieces[i].hypothesis == 0 && !sunk[i];
+            well_measured[segment[i]] += usize::from(world_piece[i]);
         }
         let measured = (0..sizes.len())
             .map(|g| ego[g] && well_measured[g] as f64 >= params.measured_share * sizes[g] as f64)
             .collect();
-        let ground = (params.ground_weight > 0.0)
-            .then(|| Ground::find(soup, inputs, &segment, &ego, &sizes, &world, params))
-            .flatten();
+        let world = static_world(&sizes, &ego);
         Segments {
             segment,
             sizes,
             centre,
             ego,
             measured,
-            ground,
+            world,
+            below,
         }
     }
 
@@ -1057,11 +1047,10 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
 /// `k` where its segment's offset puts it (the median of its pixels) more than σ under the
 /// ground.
 fn add_ground_prior(pairs: &mut PairTerms, segments: &Segments, k: f64) {
-    let Some(ground) = segments.ground.as_ref().filter(|_| k > 0.0) else {
+    let Some(w) = segments.world.filter(|_| k > 0.0) else {
         return;
     };
-    let w = ground.segment;
-    for (&g, below) in segments.segment.iter().zip(&ground.below) {
+    for (&g, below) in segments.segment.iter().zip(&segments.below) {
         let Some(below) = below.filter(|_| g != w) else {
             continue;
         };
@@ -1092,10 +1081,7 @@ fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64) {
     let Segments {
         sizes, centre, ego, ..
     } = segments;
-    let world = (0..sizes.len())
-        .filter(|&g| ego[g])
-        .max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
-    let Some(world) = world.filter(|_| weight > 0.0) else {
+    let Some(world) = segments.world.filter(|_| weight > 0.0) else {
         return;
     };
     for g in (0..sizes.len()).filter(|&g| ego[g] && g != world) {
@@ -1144,7 +1130,7 @@ fn spanning_tree_start(
             // Best d = u_g − u_h.
             let d = minimise_contacts(
                 &pair.terms,
-                &pair.behind,
+                &pair.steps().copied().collect::<Vec<_>>(),
                 sigma,
                 0.0,
                 -2.0 * band,
@@ -1566,13 +1552,15 @@ mod tests {
     fn segments_of(segment: &[usize], centre: &[f64], ego: &[bool]) -> Segments {
         let mut sizes = vec![0; centre.len()];
         segment.iter().for_each(|&g| sizes[g] += 1);
+        let world = static_world(&sizes, &ego);
         Segments {
             segment: segment.to_vec(),
             sizes,
             centre: centre.to_vec(),
             ego: ego.to_vec(),
             measured: ego.to_vec(),
-            ground: None,
+            world,
+            below: vec![None; segment.len()],
         }
     }
 
@@ -1665,12 +1653,7 @@ mod tests {
                 let mut ego = [false; 2];
                 ego[g_world] = true;
                 let mut segments = segments_of(&segment, &centre, &ego);
-                let mut below = vec![None; 4];
-                below[mover] = Some(-0.5);
-                segments.ground = Some(Ground {
-                    segment: g_world,
-                    below,
-                });
+                segments.below[mover] = Some(-0.5);
                 let u = solve_segments(&problem, &segments, &params, None).0;
                 (centre[g_mover] + u[g_mover]) - (centre[g_world] + u[g_world])
             };
