@@ -1552,7 +1552,7 @@ mod tests {
     fn segments_of(segment: &[usize], centre: &[f64], ego: &[bool]) -> Segments {
         let mut sizes = vec![0; centre.len()];
         segment.iter().for_each(|&g| sizes[g] += 1);
-        let world = static_world(&sizes, &ego);
+        let world = static_world(&sizes, ego);
         Segments {
             segment: segment.to_vec(),
             sizes,
