@@ -303,8 +303,9 @@ fn truncated(terms: &[(f64, f64)], x: f64, sigma: f64) -> f64 {
 }
 
 /// A one-sided cost of a segment's log-scale x: `k` when `dir` · (x + c) > σ, where x + c is a
-/// frame-1 log-depth gap to a larger neighbour: with `dir` = 1 the cost is paid when the segment
-/// lies more than σ behind that neighbour (see [`ScaleParams::behind_weight`]).
+/// log-depth gap: to a larger neighbour in frame 1 (with `dir` = 1 the cost is paid when the
+/// segment lies more than σ behind it, see [`ScaleParams::behind_weight`]), or to the ground
+/// (paid when a piece lies more than σ under it, see [`ScaleParams::ground_weight`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Step {
     pub k: f64,
@@ -971,8 +972,8 @@ struct Pair {
     /// larger one, where the weighted median of the link's frame-1 gaps puts it more than σ
     /// behind (empty with a zero [`ScaleParams::behind_weight`]).
     behind: Vec<Step>,
-    /// The ground prior, one step per piece of either segment that the other one's ground
-    /// plane is under: its cost for lying more than σ under the ground
+    /// The ground prior, one step per piece of the pair's segment that is not the static
+    /// world's (the other one): its cost for lying more than σ under the ground
     /// ([`ScaleParams::ground_weight`]).
     under: Vec<Step>,
 }
@@ -990,7 +991,8 @@ impl Pair {
     }
 }
 
-/// Every pair of touching segments (g < h) and its [`Pair`].
+/// Every pair of segments (g < h) that touch or share a prior (the static and ground priors tie
+/// segments to the static world's) and its [`Pair`].
 type PairTerms = std::collections::BTreeMap<(usize, usize), Pair>;
 
 /// Every link between two different segments, gathered into [`PairTerms`], with the figure

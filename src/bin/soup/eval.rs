@@ -300,7 +300,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     let k_in = resolve_intrinsics(case.intrinsics, None, gt.width(), gt.height()).intrinsics;
     let labels = &rec.superpixels.labels;
     let (w, h) = gt.size();
-    let oracle_ratios = piece_log_ratios(rec, gt, &k_in);
+    let oracle_ratios = piece_log_ratios(rec, &rec.unit_soup, gt, &k_in);
     let solved: Vec<f64> = rec.soup.pieces.iter().map(|p| p.lambda.ln()).collect();
     let oracle: Vec<f64> = oracle_ratios
         .iter()
@@ -325,7 +325,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     };
     println!("truth test of {}:", case.name);
     println!(
-        "| energy | state | E | segment solve: contacts + figure prior + ground prior | MRE |"
+        "| energy | state | E | segment solve: contacts and static prior + figure prior + ground prior | MRE |"
     );
     println!("| --- | --- | --- | --- | --- |");
     // The scale energy over per-piece log-scales of the unit-scale soup's planes and motions.
@@ -374,19 +374,16 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
             mre_of(&truth)?
         );
     }
-    // Pieces carrying most of the error: solved depth / true depth after the global alignment.
-    let shift = median(
-        oracle_ratios
-            .iter()
-            .zip(&solved)
-            .filter_map(|(r, s)| r.map(|r| r - s))
-            .collect(),
-    );
-    let mut rows: Vec<(f64, usize, f64)> = oracle_ratios
+    // Pieces carrying most of the error: solved depth / true depth after the global alignment,
+    // from the final soup's own depths (the refinement moves planes too, so its λ alone does
+    // not say how far a piece is off).
+    let final_ratios = piece_log_ratios(rec, &rec.soup, gt, &k_in);
+    let shift = median(final_ratios.iter().flatten().copied().collect());
+    let mut rows: Vec<(f64, usize, f64)> = final_ratios
         .iter()
         .enumerate()
         .filter_map(|(i, r)| {
-            let ratio = (solved[i] + shift - (*r)?).exp();
+            let ratio = (shift - (*r)?).exp();
             let px = rec.superpixels.segments[i].pixels.len() as f64;
             Some(((ratio - 1.0).abs() * px, i, ratio))
         })
@@ -412,12 +409,17 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
 
 /// Per piece of the unit-scale soup, ln median(z_gt / z̄) over its pixels (input resolution,
 /// nearest working-resolution label); `None` for a piece without valid ground truth.
-fn piece_log_ratios(rec: &Reconstruction, gt: &Grid<f32>, k_in: &Intrinsics) -> Vec<Option<f64>> {
+fn piece_log_ratios(
+    rec: &Reconstruction,
+    soup: &Soup,
+    gt: &Grid<f32>,
+    k_in: &Intrinsics,
+) -> Vec<Option<f64>> {
     let labels = &rec.superpixels.labels;
     let (w, h) = gt.size();
-    let unit = depth_at(&rec.unit_soup, labels, w, h, k_in);
+    let depth = depth_at(soup, labels, w, h, k_in);
     let key = |x: usize, y: usize| nearest_label(labels, w, h, x, y);
-    oracle_ratios(&unit, gt, &key, rec.unit_soup.pieces.len())
+    oracle_ratios(&depth, gt, &key, soup.pieces.len())
         .into_iter()
         .map(|r| r.map(f64::ln))
         .collect()
