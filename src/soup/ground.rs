@@ -105,8 +105,7 @@ fn fit_plane(
     for &i in pieces {
         let m = soup.pieces[i].m;
         for &p in superpixels.segments[i].pixels.iter().step_by(PIXEL_STRIDE) {
-            let p = p as usize;
-            let r = Vector3::from(intrinsics.ray((p % width) as f64, (p / width) as f64));
+            let r = pixel_ray(intrinsics, width, p);
             let inv = m.dot(&r);
             if inv > 0.0 {
                 let x = r / inv;
@@ -117,6 +116,12 @@ fn fit_plane(
     }
     let m = xtx.try_inverse()? * xt1;
     m.iter().all(|v| v.is_finite()).then_some(m)
+}
+
+/// The normalised ray (z = 1) of pixel index `p` (y · width + x).
+fn pixel_ray(intrinsics: &Intrinsics, width: usize, p: u32) -> Vector3<f64> {
+    let p = p as usize;
+    Vector3::from(intrinsics.ray((p % width) as f64, (p / width) as f64))
 }
 
 /// How far piece `i` lies under the ground at equal scale: the median (`BELOW_QUANTILE`),
@@ -138,8 +143,7 @@ pub fn depth_below_ground(
         .iter()
         .step_by(PIXEL_STRIDE)
         .filter_map(|&p| {
-            let p = p as usize;
-            let r = Vector3::from(intrinsics.ray((p % width) as f64, (p / width) as f64));
+            let r = pixel_ray(intrinsics, width, p);
             let (g, own) = (ground.dot(&r), m.dot(&r));
             (g > 0.0 && own > 0.0).then(|| g.ln() - own.ln())
         })

@@ -1549,6 +1549,18 @@ mod tests {
         assert!(rounded_past_edge > 0, "the rounding case is exercised");
     }
 
+    /// A link between pieces a and b with one gap c (frame 1, weight w) and continuous flow.
+    fn link(a: usize, b: usize, w: f64, c: f64) -> Link {
+        Link {
+            a,
+            b,
+            terms: vec![(w, c)],
+            frame1: vec![(w, c)],
+            median_c1: c,
+            flow_jump: 0.0,
+        }
+    }
+
     /// Segments with the given piece-to-segment map, centres and ego-motion flags (a segment on
     /// the ego-motion counts as measured static world).
     fn segments_of(segment: &[usize], centre: &[f64], ego: &[bool]) -> Segments {
@@ -1572,14 +1584,6 @@ mod tests {
         // contact with world piece 0 would hold 1 (log-scale) behind, its contact with piece 1
         // 0.3 in front; the first weighs a little more, so contact alone parks the mover
         // behind. With the figure prior, lying behind piece 1 costs more and it stays in front.
-        let link = |a, b, w, c: f64| Link {
-            a,
-            b,
-            terms: vec![(w, c)],
-            frame1: vec![(w, c)],
-            median_c1: c,
-            flow_jump: 0.0,
-        };
         // δ = s_a − s_b with a the mover: gap = δ + c = 0 at δ = −c.
         let problem = Problem {
             links: vec![
@@ -1611,14 +1615,6 @@ mod tests {
         // Contacts alone glue it to the background; there its median pixel lies δ − 0.5 under
         // the road, more than σ, and the ground prior (one broken contact) lifts it onto the
         // road. The mover is the first segment or the second, with non-zero centres.
-        let link = |a, b, w, c: f64| Link {
-            a,
-            b,
-            terms: vec![(w, c)],
-            frame1: vec![(w, c)],
-            median_c1: c,
-            flow_jump: 0.0,
-        };
         for mover in [0usize, 3] {
             let world: Vec<usize> = (0..4).filter(|&i| i != mover).collect();
             // Seen from the mover (a = mover): gap = δ + c.
@@ -1671,14 +1667,6 @@ mod tests {
         // The configuration above with the mover as piece 0 and segment 0 (the figure is the
         // first of the pair, g, not h) and non-zero segment centres: the result, in log-scale
         // s = centre + u, must be the same relative placement.
-        let link = |a, b, w, c: f64| Link {
-            a,
-            b,
-            terms: vec![(w, c)],
-            frame1: vec![(w, c)],
-            median_c1: c,
-            flow_jump: 0.0,
-        };
         // Pieces: 0 the mover; 1, 2, 3 the world. δ = s_mover − s_world as before.
         let problem = Problem {
             links: vec![
@@ -1715,14 +1703,6 @@ mod tests {
         // piece 0, holds it 1 (log-scale) behind at weight 0.02: less than the static prior's
         // 0.05 for one piece. On the ego-motion it takes the world's scale; on a motion of its
         // own, or without the prior, its contact places it.
-        let link = |a, b, w, c: f64| Link {
-            a,
-            b,
-            terms: vec![(w, c)],
-            frame1: vec![(w, c)],
-            median_c1: c,
-            flow_jump: 0.0,
-        };
         let problem = Problem {
             links: vec![
                 link(0, 1, 1.0, 0.0),
