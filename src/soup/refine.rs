@@ -30,7 +30,9 @@ use serde::Serialize;
 
 use super::init::sample_correspondences;
 use super::plane::mean_transfer_px;
-use super::scales::{self, RayPoint, ScaleInputs, ScaleParams, pair_weight, sampled_pairs};
+use super::scales::{
+    self, RayPoint, ScaleInputs, ScaleParams, TruncatedGaps, pair_weight, sampled_pairs,
+};
 use super::{Piece, Soup};
 use crate::geometry::essential::Motion;
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
@@ -124,7 +126,8 @@ pub struct Problem {
     /// Per piece, its touching pieces and the index of the contact with each.
     neighbours: Vec<Vec<(usize, usize)>>,
     focal: f64,
-    sigma: f64,
+    /// The contact costs at the scale solve's σ.
+    truncation: TruncatedGaps,
     params: RefineParams,
 }
 
@@ -190,7 +193,7 @@ impl Problem {
             contacts,
             neighbours,
             focal: 0.5 * (k.fx + k.fy),
-            sigma: scale_params.sigma,
+            truncation: TruncatedGaps::new(scale_params.sigma),
             params: *params,
         }
     }
@@ -224,17 +227,16 @@ impl Problem {
 
     /// E_cont between two states given where they meet the contact's rays.
     fn pairwise(&self, weights: &[f64], da: &[Option<RayPoint>], db: &[Option<RayPoint>]) -> f64 {
-        let s = self.sigma;
+        let full = 2.0 * self.truncation.sigma();
         weights
             .iter()
             .zip(da.iter().zip(db))
             .map(|(w, pair)| match pair {
                 (Some(a), Some(b)) => {
-                    let [g1, g2] = scales::gaps(a, b).map(f64::abs);
-                    // NaN (behind a camera) fails `<` and pays σ.
-                    w * ((if g1 < s { g1 } else { s }) + (if g2 < s { g2 } else { s }))
+                    let [g1, g2] = self.truncation.costs(a, b);
+                    w * (g1 + g2)
                 }
-                _ => w * 2.0 * s,
+                _ => w * full,
             })
             .sum()
     }
