@@ -4,7 +4,7 @@
 //! Each piece's state θ_i = (R_i, t_i = λ_i t̂_i, plane m_i / λ_i) has 9 degrees of freedom. The
 //! energy is
 //!
-//! E(θ) = w_proj Σ_i E_proj(θ_i) + Σ_(a,b touching) E_cont(θ_a, θ_b)
+//! E(θ) = w_proj Σ_i E_proj(θ_i) + Σ_(a,b touching) E_cont(θ_a, θ_b) + Σ_i E_ground(θ_i)
 //!
 //! - E_proj: the mean planar transfer error (px, capped) of the piece's reliable flow under its
 //!   homography K (R + t mᵀ) K⁻¹; scale-free, and 0 for a piece without reliable flow (its state
@@ -14,6 +14,9 @@
 //!   depths on r; frame 2: how far each moved point lies off the other's moved plane), with the
 //!   same pair weights as the scale solve ([`super::scales`]); a state behind either camera
 //!   pays the full truncation.
+//! - E_ground: `ground_weight` broken contacts for a piece whose anchor lies more than σ under
+//!   the static world's ground plane ([`super::ground`], at the median scale of the world's
+//!   well-measured pieces): nothing is seen through the floor, as in the scale solve.
 //!
 //! Each iteration draws P particles per piece — its current state (particle 0, so the energy
 //! never rises), the current states of its touching neighbours (the moves that matter most:
@@ -28,6 +31,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
+use super::ground;
 use super::init::sample_correspondences;
 use super::plane::mean_transfer_px;
 use super::scales::{
@@ -66,6 +70,12 @@ pub struct RefineParams {
     /// nearest that median. Depths 30× beyond the median move less than 1/30 of the scene's
     /// parallax (below flow noise on most pairs), so nothing in the data placed them there.
     pub max_depth_ratio: f64,
+    /// The ground in the refinement: a piece whose anchor lies more than σ under the static
+    /// world's ground plane (see [`super::ground`]) pays this many broken contacts (2σ each).
+    /// The scale solve lifts movers out of the ground; without this a piece could adopt a
+    /// neighbour's plane that sinks it again (the street with preset medium: one piece 4.6×
+    /// too deep held a fifth of the error). 0 switches it off.
+    pub ground_weight: f64,
     /// Seed of the perturbations.
     pub seed: u64,
 }
@@ -82,6 +92,7 @@ impl Default for RefineParams {
             plane_spread: 0.05,
             trws_passes: 10,
             max_depth_ratio: 30.0,
+            ground_weight: 3.0,
             seed: 2017,
         }
     }
@@ -128,7 +139,27 @@ pub struct Problem {
     focal: f64,
     /// The contact costs at the scale solve's σ.
     truncation: TruncatedGaps,
+    /// The static world's ground, if one is in view.
+    ground: Option<Ground>,
     params: RefineParams,
+}
+
+/// The static world's ground plane and what carries its scale.
+struct Ground {
+    /// The plane at the unit scale of the ego-motion (depth 1 / (mᵀx̄)), fitted by
+    /// [`ground::ground_plane`] to the well-measured pieces of the static world.
+    plane: Vector3<f64>,
+    /// Those pieces: the ground lies at their median scale λ.
+    world: Vec<usize>,
+}
+
+impl Ground {
+    /// The ground's scale in `soup`: the median λ of the world pieces.
+    fn scale(&self, soup: &Soup) -> f64 {
+        let mut lambdas: Vec<f64> = self.world.iter().map(|&i| soup.pieces[i].lambda).collect();
+        lambdas.sort_by(f64::total_cmp);
+        lambdas.get(lambdas.len() / 2).copied().unwrap_or(1.0)
+    }
 }
 
 /// Where a state meets each of a contact's rays (`None` where behind a camera).
@@ -173,7 +204,16 @@ impl Problem {
                 weights,
             });
         }
+        let world = scales::world_pieces(soup, inputs, scale_params.world_parallax);
+        let ground = (params.ground_weight > 0.0 && scale_params.ground_weight > 0.0)
+            .then(|| ground::ground_plane(soup, sp, k, &world, scale_params.ground_share))
+            .flatten()
+            .map(|plane| Ground {
+                plane,
+                world: (0..world.len()).filter(|&i| world[i]).collect(),
+            });
         Problem {
+            ground,
             extent_rays: sp
                 .segments
                 .iter()
@@ -225,6 +265,25 @@ impl Problem {
         self.params.proj_weight * cost
     }
 
+    /// The ground's cost of piece `i` in state `piece` with the ground at scale `ground_scale`
+    /// ([`Ground::scale`]): `ground_weight` broken contacts where its anchor lies more than σ
+    /// under the ground, 0 above the horizon or without a ground.
+    fn ground_cost(&self, i: usize, piece: &Piece, ground_scale: f64) -> f64 {
+        let Some(ground) = &self.ground else {
+            return 0.0;
+        };
+        let ray = &self.extent_rays[i][0];
+        let inv = ground.plane.dot(ray);
+        let z = piece.depth(ray);
+        let sigma = self.truncation.sigma();
+        // z / z_ground = z (mᵀx̄) / λ_ground.
+        if inv > 0.0 && z * inv / ground_scale > sigma.exp() {
+            self.params.ground_weight * 2.0 * sigma
+        } else {
+            0.0
+        }
+    }
+
     /// E_cont between two states given where they meet the contact's rays.
     fn pairwise(&self, weights: &[f64], da: &[Option<RayPoint>], db: &[Option<RayPoint>]) -> f64 {
         let full = 2.0 * self.truncation.sigma();
@@ -243,11 +302,12 @@ impl Problem {
 
     /// E of the soup's current states.
     pub fn energy(&self, soup: &Soup) -> f64 {
+        let ground_scale = self.ground.as_ref().map_or(1.0, |g| g.scale(soup));
         let unary: f64 = soup
             .pieces
             .iter()
             .enumerate()
-            .map(|(i, p)| self.unary(i, p))
+            .map(|(i, p)| self.unary(i, p) + self.ground_cost(i, p, ground_scale))
             .sum();
         let pairwise: f64 = self
             .contacts
@@ -275,10 +335,15 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
         let particles: Vec<Vec<Piece>> = (0..soup.pieces.len())
             .map(|i| draw_particles(soup, problem, i, shrink, &mut rng))
             .collect();
+        let ground_scale = problem.ground.as_ref().map_or(1.0, |g| g.scale(soup));
         let unary: Vec<Vec<f64>> = particles
             .iter()
             .enumerate()
-            .map(|(i, ps)| ps.iter().map(|p| problem.unary(i, p)).collect())
+            .map(|(i, ps)| {
+                ps.iter()
+                    .map(|p| problem.unary(i, p) + problem.ground_cost(i, p, ground_scale))
+                    .collect()
+            })
             .collect();
         let mut mrf = Mrf::new(unary);
         for c in &problem.contacts {
@@ -311,13 +376,22 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
         } else {
             current
         };
+        let previous = soup.pieces.clone();
         for (piece, (ps, &l)) in soup.pieces.iter_mut().zip(particles.iter().zip(&labels)) {
             *piece = ps[l];
         }
         // E does not see a global scale: the median λ goes back to 1.
         let log_scales: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
         scales::set_scales(soup, &log_scales);
-        energies.push(problem.energy(soup));
+        // The tables held the ground at the iteration's start; where the world's scale moved
+        // enough to raise E after all, the iteration is undone.
+        let mut energy = problem.energy(soup);
+        let before = energies.last().copied().unwrap_or(f64::INFINITY);
+        if energy > before {
+            soup.pieces = previous;
+            energy = before;
+        }
+        energies.push(energy);
     }
     let tail_pieces = depth_tail_control(soup, problem);
     RefineReport {

@@ -812,7 +812,7 @@ pub fn segment_objective(
 /// With noiseless flow (noise ≈ 0) every such piece with any parallax qualifies: its depth is
 /// then as exact as its plane. Non-degenerate pieces already have a mean parallax of at least
 /// `init.min_parallax_px`; the test at the anchor must also be positive.
-fn world_pieces(soup: &Soup, inputs: &ScaleInputs, world_parallax: f64) -> Vec<bool> {
+pub(crate) fn world_pieces(soup: &Soup, inputs: &ScaleInputs, world_parallax: f64) -> Vec<bool> {
     soup.pieces
         .iter()
         .zip(&inputs.superpixels.segments)
