@@ -117,12 +117,22 @@ pub struct ScaleParams {
     /// The figure prior: per link between two rigid segments, the cost (in broken contacts, w σ)
     /// of the smaller segment lying more than σ behind the larger one where the link's median
     /// frame-1 gap says so, unless the smaller one is measured static world (see
-    /// `measured_share`), which may lie behind anything. A small moving region seen against a
+    /// `measured_share`), which may lie behind anything, or the link's trusted flow is
+    /// continuous (see `continuity_trusted_share`). A small moving region seen against a
     /// larger one is usually in front of it (a mover against the world); behind, it would be
     /// seen through a hole. Two frames often leave a mover's scale free once its contacts
     /// break, and then this decides; 10 makes lying behind dearer than any contact the move
     /// could make.
     pub behind_weight: f64,
+    /// A boundary's flow counts as continuous (its median jump below `continuous_flow_px`)
+    /// only where at least this share of its pixel pairs pass the forward–backward check.
+    /// Continuous trusted flow shows no occlusion there, so the figure prior, whose premise is
+    /// an occluder in front, does not act across it: two parts of one bending body, each on a
+    /// rigid motion of its own, are neither in front of the other (their planes, distorted by
+    /// those motions, need not meet, and the prior charged the truth 39 on the flag). Half:
+    /// where most of a boundary fails the check, its flow is no evidence either way
+    /// (FlyingThings3D, whose flow jump does not tell depth edges from contacts).
+    pub continuity_trusted_share: f64,
     /// Pieces of the static world (on the ego-motion) share one scale when their parallax is at
     /// least this many times the flow's noise: their depth error is then about 1/30 ≈ 3 % or
     /// less, while pieces near the epipole or far away (little parallax) keep a scale of their
@@ -161,8 +171,9 @@ pub struct ScaleParams {
     /// The ground plane is trusted only where its pieces cover at least this share of the
     /// image (3 %: a strip of floor; less is too little to extrapolate a plane from).
     pub ground_share: f64,
-    /// Flow jump (px) across a boundary below which the flow counts as continuous there
-    /// (tail control: a depth edge needs a flow edge to be believed).
+    /// Flow jump (px) across a boundary below which the flow counts as continuous there (a
+    /// depth edge needs a flow edge to be believed: tail control, and the figure prior, see
+    /// `continuity_trusted_share`).
     pub continuous_flow_px: f64,
 }
 
@@ -176,6 +187,7 @@ impl Default for ScaleParams {
             band: 12.0,
             pairs_per_boundary: 12,
             continuous_flow_px: 1.0,
+            continuity_trusted_share: 0.5,
             behind_weight: 10.0,
             world_parallax: 30.0,
             world_gap: 0.2,
@@ -237,12 +249,21 @@ pub struct Link {
     pub median_c1: f64,
     /// Median flow jump across the boundary (px).
     pub flow_jump: f64,
+    /// Share of the boundary's pixel pairs whose flow both pass the forward–backward check.
+    pub trusted_share: f64,
 }
 
 impl Link {
     /// φ(δ).
     pub fn value(&self, delta: f64, sigma: f64) -> f64 {
         truncated(&self.terms, delta, sigma)
+    }
+
+    /// Whether the flow across the boundary is trusted and continuous: no occlusion there
+    /// ([`ScaleParams::continuity_trusted_share`]).
+    fn shows_continuity(&self, params: &ScaleParams) -> bool {
+        self.flow_jump < params.continuous_flow_px
+            && self.trusted_share >= params.continuity_trusted_share
     }
 
     /// φ with every gap truncated: the most the link can cost.
@@ -469,7 +490,10 @@ fn minimise_contacts_plain(
 /// Builds the contact problem of `soup` (its pieces' planes and motions; scales are ignored).
 pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Problem {
     let ScaleInputs {
-        boundaries, flow, ..
+        boundaries,
+        flow,
+        reliable,
+        ..
     } = *inputs;
     let unit = |p: &Piece| Piece { lambda: 1.0, ..*p };
     let mut links = Vec::new();
@@ -509,6 +533,11 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
         frame1.iter_mut().for_each(|t| t.0 /= total);
         jumps.sort_by(f64::total_cmp);
         c1s.sort_by(f64::total_cmp);
+        let trusted = edge
+            .pairs
+            .iter()
+            .filter(|&&(p, q)| reliable.data()[p as usize] && reliable.data()[q as usize])
+            .count();
         links.push(Link {
             a,
             b,
@@ -516,6 +545,7 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
             frame1,
             median_c1: c1s.get(c1s.len() / 2).copied().unwrap_or(f64::NAN),
             flow_jump: jumps[jumps.len() / 2],
+            trusted_share: trusted as f64 / edge.pairs.len() as f64,
         });
     }
     let mut touching = vec![Vec::new(); soup.pieces.len()];
@@ -1026,8 +1056,9 @@ impl Pair {
 type PairTerms = std::collections::BTreeMap<(usize, usize), Pair>;
 
 /// Every link between two different segments, gathered into [`PairTerms`], with the figure
-/// prior ([`ScaleParams::behind_weight`]) where the smaller segment is a mover, and the static
-/// prior ([`ScaleParams::static_weight`]).
+/// prior ([`ScaleParams::behind_weight`]) where the smaller segment is a mover and the flow
+/// across the link is not continuous and trusted, and the static prior
+/// ([`ScaleParams::static_weight`]).
 fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScaleParams) -> PairTerms {
     let Segments {
         segment,
@@ -1052,10 +1083,10 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
             .terms
             .extend(l.seen_from(ga == g, other));
         // A measured part of the static world may lie behind anything: its own parallax placed
-        // it.
+        // it. Across continuous trusted flow nothing occludes anything.
         let g_is_figure = is_figure(sizes, g, h);
         let figure = if g_is_figure { g } else { h };
-        if kappa <= 0.0 || segments.measured[figure] {
+        if kappa <= 0.0 || segments.measured[figure] || l.shows_continuity(params) {
             continue;
         }
         let mut gaps: Vec<(f64, f64)> = l.frame1_seen_from(ga == g, other).collect();
@@ -1635,7 +1666,8 @@ mod tests {
         assert!(rounded_past_edge > 0, "the rounding case is exercised");
     }
 
-    /// A link between pieces a and b with one gap c (frame 1, weight w) and continuous flow.
+    /// A link between pieces a and b with one gap c (frame 1, weight w) whose trusted flow
+    /// jumps by 2 px: a boundary where one side may occlude the other.
     fn link(a: usize, b: usize, w: f64, c: f64) -> Link {
         Link {
             a,
@@ -1643,7 +1675,8 @@ mod tests {
             terms: vec![(w, c)],
             frame1: vec![(w, c)],
             median_c1: c,
-            flow_jump: 0.0,
+            flow_jump: 2.0,
+            trusted_share: 1.0,
         }
     }
 
@@ -1692,6 +1725,44 @@ mod tests {
         };
         assert!((solve(0.0) - 1.0).abs() < 1e-9, "{}", solve(0.0));
         assert!((solve(1.0) + 0.3).abs() < 1e-9, "{}", solve(1.0));
+    }
+
+    #[test]
+    fn the_figure_prior_does_not_act_across_continuous_trusted_flow() {
+        // The configuration above, with the flow across the mover's boundary with piece 1
+        // continuous: nothing is occluded there, so the figure prior does not keep the mover
+        // from lying behind piece 1 and contacts park it 1 behind, as without the prior. Where
+        // most of that boundary's flow fails the check, its continuity is no evidence and the
+        // prior holds the mover in front again.
+        let placement = |jump: f64, trusted_share: f64| {
+            let behind_piece_1 = Link {
+                flow_jump: jump,
+                trusted_share,
+                ..link(3, 1, 0.45, 0.3)
+            };
+            let problem = Problem {
+                links: vec![
+                    link(0, 1, 1.0, 0.0),
+                    link(1, 2, 1.0, 0.0),
+                    link(3, 0, 0.5, -1.0),
+                    behind_piece_1,
+                ],
+                touching: vec![vec![0, 2], vec![0, 1, 3], vec![1], vec![2, 3]],
+                sigma: 0.1,
+            };
+            let segments = segments_of(&[0, 0, 0, 1], &[0.0, 0.0], &[true, false]);
+            let params = ScaleParams {
+                behind_weight: 1.0,
+                ..ScaleParams::default()
+            };
+            solve_segments(&problem, &segments, &params, None).0[1]
+        };
+        let continuous = placement(0.2, 0.9);
+        assert!((continuous - 1.0).abs() < 1e-9, "{continuous}");
+        let untrusted = placement(0.2, 0.3);
+        assert!((untrusted + 0.3).abs() < 1e-9, "{untrusted}");
+        let jumping = placement(1.5, 0.9);
+        assert!((jumping + 0.3).abs() < 1e-9, "{jumping}");
     }
 
     #[test]
@@ -1926,6 +1997,7 @@ mod tests {
             frame1: vec![(w, c)],
             median_c1: c,
             flow_jump: 0.0,
+            trusted_share: 1.0,
         };
         let links = vec![
             link(0, 1, 0.6, -1.0),
