@@ -341,7 +341,8 @@ fn the_refinement_keeps_pieces_out_of_the_ground_with_the_page_s_flow() {
     // The street with the page's flow preset (medium). The scale solve keeps every piece out of
     // the road, but the refinement knew no ground: a piece adopted a neighbour's plane that
     // sank it 4.6x too deep, a fifth of the error (MRE 0.094). With the ground's cost in the
-    // refinement: 0.073 (over 1300-1700 superpixels 0.055-0.073).
+    // refinement: 0.079 (over 1300-1700 superpixels 0.056-0.079; 0.073 before the figure prior
+    // stopped acting across continuous trusted flow).
     let flow = superpixel_soup::flow::FlowParams::preset(superpixel_soup::flow::Preset::Medium);
     let s = render(SceneKind::Street, 1024, 436).unwrap();
     let rec = reconstruct_scene(&s, FlowInput::Compute(flow), &Params::default());
