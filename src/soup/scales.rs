@@ -1697,65 +1697,52 @@ mod tests {
         }
     }
 
-    #[test]
-    fn the_figure_prior_keeps_a_loose_mover_in_front() {
-        // Segment 0 (the world, three pieces) and a one-piece mover (piece 3). The mover's
-        // contact with world piece 0 would hold 1 (log-scale) behind, its contact with piece 1
-        // 0.3 in front; the first weighs a little more, so contact alone parks the mover
-        // behind. With the figure prior, lying behind piece 1 costs more and it stays in front.
-        // δ = s_a − s_b with a the mover: gap = δ + c = 0 at δ = −c.
+    /// Segment 0 (the world, pieces 0–2, on the ego-motion) and a one-piece mover (piece 3, on
+    /// a motion of its own). The mover's contact with world piece 0 would hold it 1
+    /// (log-scale) behind, its contact with piece 1 (`mover_to_1`, weight 0.45, gap c = 0.3)
+    /// 0.3 in front; the first weighs a little more, so contact alone parks the mover behind.
+    /// δ = s_a − s_b with a the mover: gap = δ + c = 0 at δ = −c. Returns the mover's offset.
+    fn place_loose_mover(mover_to_1: Link, behind_weight: f64) -> f64 {
         let problem = Problem {
             links: vec![
                 link(0, 1, 1.0, 0.0),
                 link(1, 2, 1.0, 0.0),
                 link(3, 0, 0.5, -1.0),
-                link(3, 1, 0.45, 0.3),
+                mover_to_1,
             ],
             touching: vec![vec![0, 2], vec![0, 1, 3], vec![1], vec![2, 3]],
             sigma: 0.1,
         };
-        // The world on the ego-motion, the mover on a motion of its own.
         let segments = segments_of(&[0, 0, 0, 1], &[0.0, 0.0], &[true, false]);
-        let solve = |behind_weight| {
-            let params = ScaleParams {
-                behind_weight,
-                ..ScaleParams::default()
-            };
-            solve_segments(&problem, &segments, &params, None).0[1]
+        let params = ScaleParams {
+            behind_weight,
+            ..ScaleParams::default()
         };
+        solve_segments(&problem, &segments, &params, None).0[1]
+    }
+
+    #[test]
+    fn the_figure_prior_keeps_a_loose_mover_in_front() {
+        // With the figure prior, lying behind piece 1 costs more and the mover stays in front.
+        let solve = |behind_weight| place_loose_mover(link(3, 1, 0.45, 0.3), behind_weight);
         assert!((solve(0.0) - 1.0).abs() < 1e-9, "{}", solve(0.0));
         assert!((solve(1.0) + 0.3).abs() < 1e-9, "{}", solve(1.0));
     }
 
     #[test]
     fn the_figure_prior_does_not_act_across_continuous_trusted_flow() {
-        // The configuration above, with the flow across the mover's boundary with piece 1
-        // continuous: nothing is occluded there, so the figure prior does not keep the mover
-        // from lying behind piece 1 and contacts park it 1 behind, as without the prior. Where
-        // most of that boundary's flow fails the check, its continuity is no evidence and the
-        // prior holds the mover in front again.
+        // The loose mover with the flow across its boundary with piece 1 continuous: nothing
+        // is occluded there, so the figure prior does not keep the mover from lying behind
+        // piece 1 and contacts park it 1 behind, as without the prior. Where most of that
+        // boundary's flow fails the check, its continuity is no evidence and the prior holds
+        // the mover in front again.
         let placement = |jump: f64, trusted_share: f64| {
-            let behind_piece_1 = Link {
+            let mover_to_1 = Link {
                 flow_jump: jump,
                 trusted_share,
                 ..link(3, 1, 0.45, 0.3)
             };
-            let problem = Problem {
-                links: vec![
-                    link(0, 1, 1.0, 0.0),
-                    link(1, 2, 1.0, 0.0),
-                    link(3, 0, 0.5, -1.0),
-                    behind_piece_1,
-                ],
-                touching: vec![vec![0, 2], vec![0, 1, 3], vec![1], vec![2, 3]],
-                sigma: 0.1,
-            };
-            let segments = segments_of(&[0, 0, 0, 1], &[0.0, 0.0], &[true, false]);
-            let params = ScaleParams {
-                behind_weight: 1.0,
-                ..ScaleParams::default()
-            };
-            solve_segments(&problem, &segments, &params, None).0[1]
+            place_loose_mover(mover_to_1, 1.0)
         };
         let continuous = placement(0.2, 0.9);
         assert!((continuous - 1.0).abs() < 1e-9, "{continuous}");
