@@ -1,6 +1,7 @@
 // The page end to end in headless Chromium: two photos picked through the file input until the
 // result is shown (decode, worker, pipeline in wasm, pictures, 3D view), with default
-// parameters, and the peak memory of the tab; plus how fast the page and its worker load.
+// parameters, the time of each pipeline stage in the worker, and the peak memory of the tab;
+// plus how fast the page and its worker load.
 //
 //   node benches/page.mjs [--runs 3] [--no-loading]
 //
@@ -138,6 +139,7 @@ async function endToEnd(files) {
     return {
       ms: run.endToEndMs,
       stages: Object.values(run.stagesMs).reduce((a, b) => a + b, 0),
+      stagesMs: run.stagesMs,
       wasmMemory: run.memoryBytes / 2 ** 20,
       memory: Math.max(largest(pids, 'VmHWM'), sampled),
       workingSize: report.working_size.join('×'),
@@ -193,6 +195,7 @@ async function loading(module, network) {
 const min = (xs) => Math.min(...xs);
 const max = (xs) => Math.max(...xs);
 const rows = [];
+const stageRows = [];
 try {
   const cases = [
     ['1024×436 PNG pair (street)', ['frame1.png', 'frame2.png'].map((name) => path.join(work, 'small', 'street', name))],
@@ -221,6 +224,10 @@ try {
     for (let run = 0; run < runs; run++) {
       results.push(await endToEnd(files));
     }
+    const stageNames = Object.keys(results[0].stagesMs);
+    stageRows.push(
+      `| ${name} | ` + stageNames.map((s) => `${s} ${min(results.map((r) => r.stagesMs[s])).toFixed(0)}`).join(' · ') + ' |',
+    );
     rows.push(
       `| ${name} | ${results[0].workingSize} | ${(min(results.map((r) => r.ms)) / 1000).toFixed(2)} s | ` +
         `${(min(results.map((r) => r.stages)) / 1000).toFixed(2)} s | ` +
@@ -247,6 +254,10 @@ try {
   console.log('| input | working size | end to end (pick → result shown) | pipeline stages in wasm | peak tab memory (renderer, VmHWM or sampled VmRSS) | worker wasm memory |');
   console.log('| --- | --- | --- | --- | --- | --- |');
   console.log(rows.join('\n'));
+  console.log(`\nThe pipeline's stages in the worker (ms, minimum of ${runs} runs each)\n`);
+  console.log('| input | stages |');
+  console.log('| --- | --- |');
+  console.log(stageRows.join('\n'));
   if (loadRows.length > 0) {
     console.log(`\nFirst load (empty cache, gzip from scripts/serve.py), minimum of ${runs}\n`);
     console.log('| network | worker module | page ready (worker loaded) | 3D viewer ready | worker start | worker restart (cancel) |');
