@@ -131,7 +131,8 @@ pub struct ScaleParams {
     /// rigid motion of its own, are neither in front of the other (their planes, distorted by
     /// those motions, need not meet, and the prior charged the truth 39 on the flag). Half:
     /// where most of a boundary fails the check, its flow is no evidence either way
-    /// (FlyingThings3D, whose flow jump does not tell depth edges from contacts).
+    /// (FlyingThings3D, whose flow jump does not tell depth edges from contacts). Tail control
+    /// asks the same of a boundary before it moves a piece to its neighbours' scale.
     pub continuity_trusted_share: f64,
     /// Pieces of the static world (on the ego-motion) share one scale when their parallax is at
     /// least this many times the flow's noise: their depth error is then about 1/30 ≈ 3 % or
@@ -171,9 +172,9 @@ pub struct ScaleParams {
     /// The ground plane is trusted only where its pieces cover at least this share of the
     /// image (3 %: a strip of floor; less is too little to extrapolate a plane from).
     pub ground_share: f64,
-    /// Flow jump (px) across a boundary below which the flow counts as continuous there (a
-    /// depth edge needs a flow edge to be believed: tail control, and the figure prior, see
-    /// `continuity_trusted_share`).
+    /// Flow jump (px) across a boundary below which the flow counts as continuous there, where
+    /// enough of it is trusted (`continuity_trusted_share`): a depth edge needs a flow edge to
+    /// be believed (tail control), and nothing occludes anything there (the figure prior).
     pub continuous_flow_px: f64,
 }
 
@@ -1289,8 +1290,9 @@ fn discrete_start(
 }
 
 /// Tail control: pieces whose depth disagrees with every touching neighbour in both frames
-/// (each link's cost within 10 % of its fully truncated value) while the flow is continuous
-/// across some boundary of theirs move to the scale that best meets their neighbours.
+/// (each link's cost within 10 % of its fully truncated value) while some boundary of theirs
+/// shows continuous trusted flow ([`Link::shows_continuity`], the figure prior's test) move to
+/// the scale that best meets their neighbours.
 /// Returns how many moved.
 fn tail_control(problem: &Problem, s: &mut [f64], params: &ScaleParams) -> usize {
     let sigma = problem.sigma;
@@ -1306,7 +1308,7 @@ fn tail_control(problem: &Problem, s: &mut [f64], params: &ScaleParams) -> usize
         });
         let continuous = links
             .iter()
-            .any(|&e| problem.links[e].flow_jump < params.continuous_flow_px);
+            .any(|&e| problem.links[e].shows_continuity(params));
         if disagrees && continuous {
             let terms = problem.local_terms(i, s);
             let x = minimise_contacts(&terms, &[], sigma, s[i], f64::NEG_INFINITY, f64::INFINITY);
@@ -1719,6 +1721,34 @@ mod tests {
             ..ScaleParams::default()
         };
         solve_segments(&problem, &segments, &params, None).0[1]
+    }
+
+    #[test]
+    fn tail_control_moves_a_stray_piece_only_across_continuous_trusted_flow() {
+        // Piece 1 lies 2 (log-scale) off both its neighbours 0 and 2, whose planes meet it at
+        // equal scale (and meet pieces 3 and 4 where they are); its boundaries show no flow
+        // edge. Where that flow passes the forward–backward check, nothing justifies the depth
+        // edge and the piece joins its neighbours; where it fails, the flow is no evidence and
+        // the piece stays.
+        let stray = |trusted_share: f64| {
+            let quiet = |a, b| Link {
+                flow_jump: 0.2,
+                trusted_share,
+                ..link(a, b, 1.0, 0.0)
+            };
+            let problem = Problem {
+                links: vec![quiet(0, 1), quiet(1, 2), quiet(0, 3), quiet(2, 4)],
+                touching: vec![vec![0, 2], vec![0, 1], vec![1, 3], vec![2], vec![3]],
+                sigma: 0.1,
+            };
+            let mut s = vec![0.0, 2.0, 0.0, 0.0, 0.0];
+            let moved = tail_control(&problem, &mut s, &ScaleParams::default());
+            (moved, s[1])
+        };
+        let (moved, s1) = stray(1.0);
+        assert_eq!(moved, 1);
+        assert!(s1.abs() < 1e-9, "{s1}");
+        assert_eq!(stray(0.2), (0, 2.0));
     }
 
     #[test]
