@@ -2007,15 +2007,7 @@ mod tests {
         // Segments 1 and 2 are tied to each other (equal scales) and each, more weakly, to
         // segment 0 at a log-scale 1 below it. Moving either alone breaks the strong tie, so
         // coordinate descent from equal scales stays there; the joint labelling moves both.
-        let link = |a, b, w, c| Link {
-            a,
-            b,
-            terms: vec![(w, c)],
-            frame1: vec![(w, c)],
-            median_c1: c,
-            flow_jump: 0.0,
-            trusted_share: 1.0,
-        };
+        // (The figure prior is off, so the links' flow does not matter.)
         let links = vec![
             link(0, 1, 0.6, -1.0),
             link(0, 2, 0.6, -1.0),
