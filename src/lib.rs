@@ -5,7 +5,8 @@
 //! frames ([`image`], [`input`], [`camera`]; [`jpeg`] decodes the page's JPEG photos straight to
 //! the working size) → flow ([`flow`]) → superpixels and graphs ([`superpixels`]) → unit-scale
 //! soup → scaled soup ([`soup`]) → outputs ([`output`]);
-//! [`pipeline::reconstruct`] runs them all. [`formats`] reads and writes the files, [`export`]
+//! [`pipeline::reconstruct`] runs them all; [`mrf`] holds the discrete solvers the soup uses
+//! ([`numeric`]: the minimum their hot loops take). [`formats`] reads and writes the files, [`export`]
 //! encodes a reconstruction's output files, [`eval`] scores results, [`synth`] renders scenes
 //! with exact ground truth. At the edge: [`render`], the 3D viewer, and `web` (wasm only), the
 //! page's JavaScript API.
@@ -26,6 +27,7 @@ pub mod image;
 pub mod input;
 pub mod jpeg;
 pub mod mrf;
+pub mod numeric;
 pub mod output;
 pub mod pipeline;
 pub mod render;

@@ -10,6 +10,8 @@
 //! the result is exact; in general it is a good labelling plus a lower bound on the minimum,
 //! computed by minimising every chain of the decomposition exactly (`lower_bound`).
 
+use crate::numeric::min;
+
 /// A pairwise table between nodes `a < b`: `cost[x_a · labels(b) + x_b]`.
 #[derive(Clone, Debug)]
 pub struct Edge {
@@ -160,7 +162,7 @@ fn add(acc: &mut [f64], v: &[f64]) {
 
 /// Subtracts the minimum so messages stay bounded.
 fn normalise(v: &mut [f64]) {
-    let m = v.iter().copied().fold(f64::INFINITY, f64::min);
+    let m = v.iter().copied().fold(f64::INFINITY, min);
     if m.is_finite() {
         v.iter_mut().for_each(|x| *x -= m);
     }
@@ -188,7 +190,7 @@ pub fn trws(mrf: &Mrf, options: &TrwsOptions) -> TrwsResult {
                     let base = g * bel - back;
                     let row = &edge.cost[xa * lb..(xa + 1) * lb];
                     for (o, &c) in out.iter_mut().zip(row) {
-                        *o = o.min(base + c);
+                        *o = min(*o, base + c);
                     }
                 }
                 normalise(&mut out);
@@ -214,7 +216,7 @@ pub fn trws(mrf: &Mrf, options: &TrwsOptions) -> TrwsResult {
                         .iter()
                         .zip(&base)
                         .map(|(c, b)| c + b)
-                        .fold(f64::INFINITY, f64::min);
+                        .fold(f64::INFINITY, min);
                 }
                 normalise(&mut out);
                 msg.to_a[e] = out;
@@ -280,7 +282,7 @@ fn lower_bound(mrf: &Mrf, inc: &Incidence, msg: &Messages) -> f64 {
     };
     let mut bound: f64 = single
         .iter()
-        .map(|&i| mrf.unary[i].iter().copied().fold(f64::INFINITY, f64::min))
+        .map(|&i| mrf.unary[i].iter().copied().fold(f64::INFINITY, min))
         .sum();
     for &start in &starts {
         // Viterbi along the chain: cost-to-here per label of the current node.
@@ -295,13 +297,13 @@ fn lower_bound(mrf: &Mrf, inc: &Incidence, msg: &Messages) -> f64 {
                 let base = a - back;
                 let row = &edge.cost[xa * lb..(xa + 1) * lb];
                 for ((o, &c), &m) in out.iter_mut().zip(row).zip(&msg.to_b[e]) {
-                    *o = o.min(base + c - m);
+                    *o = min(*o, base + c - m);
                 }
             }
             acc = out.iter().zip(&node_b).map(|(o, b)| o + b).collect();
             e = next[e];
         }
-        bound += acc.iter().copied().fold(f64::INFINITY, f64::min);
+        bound += acc.iter().copied().fold(f64::INFINITY, min);
     }
     bound
 }

@@ -10,6 +10,7 @@ use nalgebra::{Matrix3, Vector3};
 use super::Degeneracy;
 use crate::geometry::Correspondence;
 use crate::geometry::essential::Motion;
+use crate::numeric::min;
 
 /// The normal equations of the plane for `points` under `motion`, each point weighted.
 fn normal_equations(
@@ -78,7 +79,7 @@ pub fn mean_transfer_px(
         .map(|c| {
             let e = transfer_error(c, motion, m) * focal;
             if e.is_finite() && m.dot(&c.x1) > 0.0 {
-                e.min(cap_px)
+                min(e, cap_px)
             } else {
                 cap_px
             }

@@ -162,9 +162,21 @@ impl Ground {
     }
 }
 
-/// Where a state meets each of a contact's rays (`None` where behind a camera).
-fn ray_points(piece: &Piece, rays: &[Vector3<f64>]) -> Vec<Option<RayPoint>> {
-    rays.iter().map(|r| scales::ray_point(piece, r)).collect()
+/// Where each of `states` meets each of `rays`, ray by ray: element `r · states.len() + k` is
+/// state k on ray r, all NaN where that point is behind a camera.
+fn ray_columns(states: &[Piece], rays: &[Vector3<f64>]) -> Vec<RayPoint> {
+    let behind = RayPoint {
+        log_depth: f64::NAN,
+        moved: Vector3::repeat(f64::NAN),
+        plane2: Vector3::repeat(f64::NAN),
+    };
+    rays.iter()
+        .flat_map(|r| {
+            states
+                .iter()
+                .map(move |s| scales::ray_point(s, r).unwrap_or(behind))
+        })
+        .collect()
 }
 
 impl Problem {
@@ -284,20 +296,30 @@ impl Problem {
         }
     }
 
-    /// E_cont between two states given where they meet the contact's rays.
-    fn pairwise(&self, weights: &[f64], da: &[Option<RayPoint>], db: &[Option<RayPoint>]) -> f64 {
+    /// The E_cont table of contact `c` between the states `a` of its piece `c.a` and `b` of
+    /// `c.b`: element `i · b.len() + j` is E_cont(a[i], b[j]). The loops run over `b` innermost
+    /// on columns without `Option`s (a state behind a camera on a ray is NaN there and pays σ in
+    /// both frames through the comparisons of [`TruncatedGaps::costs`]), so they compile without
+    /// branches: this table is most of the refinement's time.
+    fn contact_table(&self, c: &Contact, a: &[Piece], b: &[Piece]) -> Vec<f64> {
         let full = 2.0 * self.truncation.sigma();
-        weights
-            .iter()
-            .zip(da.iter().zip(db))
-            .map(|(w, pair)| match pair {
-                (Some(a), Some(b)) => {
-                    let [g1, g2] = self.truncation.costs(a, b);
-                    w * (g1 + g2)
+        let columns = ray_columns(b, &c.rays);
+        let n = b.len();
+        let mut table = vec![0.0; a.len() * n];
+        for (row, state) in table.chunks_exact_mut(n).zip(a) {
+            for ((w, ray), column) in c.weights.iter().zip(&c.rays).zip(columns.chunks_exact(n)) {
+                match scales::ray_point(state, ray) {
+                    Some(pa) => {
+                        for (t, pb) in row.iter_mut().zip(column) {
+                            let [g1, g2] = self.truncation.costs(&pa, pb);
+                            *t += w * (g1 + g2);
+                        }
+                    }
+                    None => row.iter_mut().for_each(|t| *t += w * full),
                 }
-                _ => w * full,
-            })
-            .sum()
+            }
+        }
+        table
     }
 
     /// E of the soup's current states.
@@ -312,13 +334,7 @@ impl Problem {
         let pairwise: f64 = self
             .contacts
             .iter()
-            .map(|c| {
-                self.pairwise(
-                    &c.weights,
-                    &ray_points(&soup.pieces[c.a], &c.rays),
-                    &ray_points(&soup.pieces[c.b], &c.rays),
-                )
-            })
+            .map(|c| self.contact_table(c, &[soup.pieces[c.a]], &[soup.pieces[c.b]])[0])
             .sum();
         unary + pairwise
     }
@@ -347,20 +363,7 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
             .collect();
         let mut mrf = Mrf::new(unary);
         for c in &problem.contacts {
-            let da: Vec<Vec<Option<RayPoint>>> = particles[c.a]
-                .iter()
-                .map(|p| ray_points(p, &c.rays))
-                .collect();
-            let db: Vec<Vec<Option<RayPoint>>> = particles[c.b]
-                .iter()
-                .map(|p| ray_points(p, &c.rays))
-                .collect();
-            let mut table = Vec::with_capacity(da.len() * db.len());
-            for a in &da {
-                for b in &db {
-                    table.push(problem.pairwise(&c.weights, a, b));
-                }
-            }
+            let table = problem.contact_table(c, &particles[c.a], &particles[c.b]);
             mrf.add_edge(c.a, c.b, table);
         }
         let current = vec![0; soup.pieces.len()];
@@ -522,4 +525,76 @@ fn flattened(state: &Piece, z: f64) -> Piece {
 
 fn same_state(a: &Piece, b: &Piece) -> bool {
     a.lambda == b.lambda && a.m == b.m && a.r == b.r && a.t_hat == b.t_hat
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A state near the plane z = 5 moving towards the camera; every fourth one's plane faces
+    /// away, so it lies behind the camera on every ray.
+    fn state(rng: &mut Rng, k: usize) -> Piece {
+        let m = Vector3::new(0.05 * rng.normal(), 0.05 * rng.normal(), 0.2);
+        Piece {
+            r: *nalgebra::Rotation3::new(Vector3::new(0.0, 0.02 * rng.normal(), 0.0)).matrix(),
+            t_hat: Vector3::new(0.2 * rng.normal(), 0.0, -1.0).normalize(),
+            m: if k % 4 == 3 { -m } else { m },
+            lambda: (0.1 * rng.normal()).exp(),
+            hypothesis: 0,
+            degenerate: None,
+        }
+    }
+
+    #[test]
+    fn contact_tables_match_the_pairwise_sum_of_truncated_gaps() {
+        let mut rng = Rng::new(5);
+        let rays: Vec<Vector3<f64>> = (0..12)
+            .map(|_| Vector3::new(0.3 * rng.normal(), 0.3 * rng.normal(), 1.0))
+            .collect();
+        let weights: Vec<f64> = (0..12).map(|_| rng.uniform() / 6.0).collect();
+        let truncation = TruncatedGaps::new(0.1);
+        let problem = Problem {
+            samples: Vec::new(),
+            extent_rays: Vec::new(),
+            contacts: vec![Contact {
+                a: 0,
+                b: 1,
+                rays: rays.clone(),
+                weights: weights.clone(),
+            }],
+            neighbours: Vec::new(),
+            focal: 1.0,
+            truncation,
+            ground: None,
+            params: RefineParams::default(),
+        };
+        let a: Vec<Piece> = (0..9).map(|k| state(&mut rng, k)).collect();
+        let b: Vec<Piece> = (0..7).map(|k| state(&mut rng, k + 1)).collect();
+        let table = problem.contact_table(&problem.contacts[0], &a, &b);
+        let mut inside = 0;
+        for (i, sa) in a.iter().enumerate() {
+            for (j, sb) in b.iter().enumerate() {
+                let reference: f64 = rays
+                    .iter()
+                    .zip(&weights)
+                    .map(|(ray, w)| {
+                        match (scales::ray_point(sa, ray), scales::ray_point(sb, ray)) {
+                            (Some(pa), Some(pb)) => {
+                                let [g1, g2] = truncation.costs(&pa, &pb);
+                                inside += usize::from(g1 < 0.1 && g2 < 0.1);
+                                w * (g1 + g2)
+                            }
+                            _ => w * 0.2,
+                        }
+                    })
+                    .sum();
+                let got = table[i * b.len() + j];
+                assert!(
+                    (got - reference).abs() < 1e-12,
+                    "{i} {j}: {got} against {reference}"
+                );
+            }
+        }
+        assert!(inside > 50, "only {inside} ray pairs inside the truncation");
+    }
 }
