@@ -779,8 +779,9 @@ pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams)
 
 /// Per-piece log-scales `start` made one per rigid segment (each segment at the median offset
 /// of its pieces), then, with `descend`, the segment solve (step 2 alone) from there instead of
-/// its own starts: the truth test's "truth as segments", which shows whether one scale per
-/// rigid segment can hold the truth and whether the segment solve's minimum lies below it.
+/// its own starts (brought into the solve's band around the largest segment first): the truth
+/// test's "truth as segments", which shows whether one scale per rigid segment can hold the
+/// truth and whether the segment solve's minimum lies below it.
 /// Pieces past the end of `start`, or with a non-finite value, do not count.
 pub fn segment_descent_from(
     soup: &Soup,
@@ -976,7 +977,18 @@ fn solve_segments(
         (terms, steps)
     };
     let starts = match only_start {
-        Some(start) => vec![start],
+        // The solve keeps every segment within the band around the reference, so a start
+        // (the truth test's) is brought into it: a segment of one or two pieces can lie
+        // e^5 and more from the rest at the truth, where the solve cannot reach.
+        Some(mut start) => {
+            if let Some(r) = reference {
+                let centre = start[r];
+                start
+                    .iter_mut()
+                    .for_each(|x| *x = x.clamp(centre - band, centre + band));
+            }
+            vec![start]
+        }
         None => vec![
             spanning_tree_start(&pairs, sigma, count, reference, band),
             vec![0.0; count],
@@ -1728,6 +1740,31 @@ mod tests {
             ..ScaleParams::default()
         };
         solve_segments(&problem, &segments, &params, None).0[1]
+    }
+
+    #[test]
+    fn a_given_start_is_solved_within_the_band_like_the_solve_itself() {
+        // The truth test's start can put a one-piece segment far from the rest (its contact
+        // would hold it at δ = 5, past the band of ln 12); the solve from there must stay in
+        // the band the solve's own starts keep to, or the two objectives are not comparable.
+        let problem = Problem {
+            links: vec![
+                link(0, 1, 1.0, 0.0),
+                link(1, 2, 1.0, 0.0),
+                link(3, 0, 0.5, -5.0),
+            ],
+            touching: vec![vec![0, 2], vec![0, 1], vec![1], vec![0]],
+            sigma: 0.1,
+        };
+        let segments = segments_of(&[0, 0, 0, 1], &[0.0, 0.0], &[true, false]);
+        // Without the figure prior, which would pull the segment in front by itself.
+        let params = ScaleParams {
+            behind_weight: 0.0,
+            ..ScaleParams::default()
+        };
+        let band = params.band.ln();
+        let u = solve_segments(&problem, &segments, &params, Some(vec![0.0, 6.0])).0;
+        assert!((u[1] - u[0]).abs() <= band + 1e-9, "{u:?} beyond ±{band}");
     }
 
     #[test]
