@@ -14,6 +14,7 @@ use serde::Serialize;
 use crate::error::{Error, Result};
 use crate::flow::{FlowField, is_known};
 use crate::grid::Grid;
+use crate::numeric::hypot;
 
 /// Depth accuracy of an estimate against ground truth.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -123,8 +124,8 @@ pub fn flow_metrics(gt: &FlowField, est: &FlowField) -> Result<FlowMetrics> {
         .zip(est.data())
         .filter(|&(&g, &e)| is_known(g) && is_known(e))
         .map(|(g, e)| {
-            let err = ((g[0] - e[0]) as f64).hypot((g[1] - e[1]) as f64);
-            (err, (g[0] as f64).hypot(g[1] as f64))
+            let err = hypot((g[0] - e[0]) as f64, (g[1] - e[1]) as f64);
+            (err, hypot(g[0] as f64, g[1] as f64))
         })
         .collect();
     if errors.is_empty() {

@@ -3,6 +3,7 @@
 
 use crate::error::{Error, Result};
 use crate::grid::Grid;
+use crate::numeric::pow_f32;
 
 /// An 8-bit sRGB colour frame; element (u, v) is `[red, green, blue]`.
 pub type Frame = Grid<[u8; 3]>;
@@ -289,7 +290,7 @@ fn srgb_to_linear(c: f32) -> f32 {
     if c <= 0.04045 {
         c / 12.92
     } else {
-        ((c + 0.055) / 1.055).powf(2.4)
+        pow_f32((c + 0.055) / 1.055, 2.4)
     }
 }
 

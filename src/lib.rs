@@ -6,7 +6,7 @@
 //! the working size) → flow ([`flow`]) → superpixels and graphs ([`superpixels`]) → unit-scale
 //! soup → scaled soup ([`soup`]) → outputs ([`output`]);
 //! [`pipeline::reconstruct`] runs them all; [`mrf`] holds the discrete solvers the soup uses
-//! ([`numeric`]: the minimum their hot loops take). [`formats`] reads and writes the files, [`export`]
+//! ([`numeric`]: the maths functions, the same bits on every platform). [`formats`] reads and writes the files, [`export`]
 //! encodes a reconstruction's output files, [`eval`] scores results, [`synth`] renders scenes
 //! with exact ground truth. At the edge: [`render`], the 3D viewer, and `web` (wasm only), the
 //! page's JavaScript API.

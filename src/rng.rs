@@ -1,6 +1,8 @@
 //! A small seeded random number generator (PCG32, O'Neill 2014) so that every randomised step
 //! (RANSAC samples, the viewer's decimation) gives the same result on every run and platform.
 
+use crate::numeric::{cos, ln};
+
 /// PCG-XSH-RR 32-bit generator with a 64-bit state.
 #[derive(Clone, Debug)]
 pub struct Rng {
@@ -58,7 +60,7 @@ impl Rng {
     pub fn normal(&mut self) -> f64 {
         let u1 = 1.0 - self.uniform(); // (0, 1]
         let u2 = self.uniform();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+        (-2.0 * ln(u1)).sqrt() * cos(std::f64::consts::TAU * u2)
     }
 
     /// `k` distinct indices from `0..n` (all of them, shuffled, when `k ≥ n`).

@@ -5,6 +5,7 @@
 use super::{FlowField, is_known};
 use crate::grid::Grid;
 use crate::image::Frame;
+use crate::numeric::{atan2_f32, hypot_f32};
 
 /// Steps of each segment of the wheel: red–yellow, yellow–green, green–cyan, cyan–blue,
 /// blue–magenta, magenta–red.
@@ -36,8 +37,8 @@ fn wheel(k: usize) -> [f32; 3] {
 /// blue-violet (image axes: v points down).
 pub fn vector_colour(u: f32, v: f32) -> [u8; 3] {
     let steps: usize = SEGMENTS.iter().sum();
-    let radius = u.hypot(v);
-    let angle = (-v).atan2(-u) / std::f32::consts::PI;
+    let radius = hypot_f32(u, v);
+    let angle = atan2_f32(-v, -u) / std::f32::consts::PI;
     let position = (angle + 1.0) / 2.0 * (steps - 1) as f32;
     let k0 = (position.floor() as usize).min(steps - 1);
     let k1 = (k0 + 1) % steps;
@@ -59,7 +60,7 @@ pub fn max_radius(flow: &FlowField) -> f32 {
     flow.data()
         .iter()
         .filter(|f| is_known(**f))
-        .map(|f| f[0].hypot(f[1]))
+        .map(|f| hypot_f32(f[0], f[1]))
         .fold(0.0, f32::max)
 }
 

@@ -19,6 +19,7 @@ use super::lanes::F4;
 use super::pyramid::{Level, upsample};
 use super::variational::{VariationalParams, refine};
 use crate::error::{Error, Result};
+use crate::numeric::log2;
 
 /// Speed/accuracy trade-offs, named as OpenCV's DIS presets.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -154,11 +155,11 @@ pub fn levels(width: usize, height: usize, params: &DisParams) -> Option<(usize,
     }
     let long = width.max(height) as f64 / (4.0 * ps as f64);
     let by_long = if long > 1.0 {
-        long.log2().round() as usize
+        log2(long).round() as usize
     } else {
         0
     };
-    let by_short = ((width.min(height) / ps) as f64).log2().floor() as usize;
+    let by_short = log2((width.min(height) / ps) as f64).floor() as usize;
     Some((finest, by_long.min(by_short).max(finest)))
 }
 

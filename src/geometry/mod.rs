@@ -17,6 +17,7 @@ pub mod homography;
 pub mod ransac;
 pub mod triangulate;
 
+use crate::numeric::hypot;
 use nalgebra::{Matrix3, SMatrix, SymmetricEigen, Vector3};
 
 /// A correspondence in normalised coordinates: x̄ in frame 1 and x̄' in frame 2 (z = 1 each).
@@ -72,7 +73,7 @@ pub(crate) fn conditioning(points: impl Iterator<Item = Vector3<f64>> + Clone) -
         .clone()
         .fold((0.0, 0.0), |(x, y), p| (x + p.x, y + p.y));
     let (cx, cy) = (cx / n, cy / n);
-    let mean = points.map(|p| (p.x - cx).hypot(p.y - cy)).sum::<f64>() / n;
+    let mean = points.map(|p| hypot(p.x - cx, p.y - cy)).sum::<f64>() / n;
     let s = if mean > 1e-12 {
         std::f64::consts::SQRT_2 / mean
     } else {

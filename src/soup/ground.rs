@@ -16,6 +16,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::Soup;
 use crate::camera::Intrinsics;
+use crate::numeric::{cos, ln};
 use crate::superpixels::Superpixels;
 
 /// A plane counts as ground-like when its normal is within this angle of the camera's downward
@@ -53,7 +54,7 @@ pub fn ground_plane(
     min_share: f64,
 ) -> Option<Vector3<f64>> {
     let ray = |[u, v]: [f64; 2]| Vector3::from(intrinsics.ray(u, v));
-    let cos_tilt = GROUND_TILT_DEG.to_radians().cos();
+    let cos_tilt = cos(GROUND_TILT_DEG.to_radians());
     // (piece, anchor ray) of every ground-like candidate.
     let ground_like: Vec<(usize, Vector3<f64>)> = soup
         .pieces
@@ -68,7 +69,7 @@ pub fn ground_plane(
             .iter()
             .filter(|&&(i, r)| {
                 let (a, b) = (m.dot(&r), soup.pieces[i].m.dot(&r));
-                a > 0.0 && (a.ln() - b.ln()).abs() < ON_PLANE_LOG_GAP
+                a > 0.0 && (ln(a) - ln(b)).abs() < ON_PLANE_LOG_GAP
             })
             .map(|&(i, _)| i)
             .collect()
@@ -145,7 +146,7 @@ pub fn depth_below_ground(
         .filter_map(|&p| {
             let r = pixel_ray(intrinsics, width, p);
             let (g, own) = (ground.dot(&r), m.dot(&r));
-            (g > 0.0 && own > 0.0).then(|| g.ln() - own.ln())
+            (g > 0.0 && own > 0.0).then(|| ln(g) - ln(own))
         })
         .collect();
     if below.is_empty() {

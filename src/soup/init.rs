@@ -32,6 +32,7 @@ use crate::geometry::essential::{
 use crate::geometry::homography::{homography_dlt, transfer_error};
 use crate::grid::Grid;
 use crate::mrf::graphcut::{CostTable, alpha_expansion};
+use crate::numeric::hypot;
 use crate::rng::Rng;
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::KnnGraph;
@@ -480,7 +481,7 @@ fn check_parallax(all: &[Correspondence], focal: f64) -> Result<()> {
         .filter(|c| {
             let p = r * c.x1;
             let d = (p / p.z - c.x2) * focal;
-            p.z > 0.0 && d.x.hypot(d.y) < 0.5
+            p.z > 0.0 && hypot(d.x, d.y) < 0.5
         })
         .count();
     if explained as f64 >= 0.9 * all.len() as f64 {

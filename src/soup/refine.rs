@@ -40,6 +40,7 @@ use super::scales::{
 use super::{Piece, Soup};
 use crate::geometry::essential::Motion;
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
+use crate::numeric::{exp, ln};
 use crate::rng::Rng;
 
 /// Settings of the refinement.
@@ -289,7 +290,7 @@ impl Problem {
         let z = piece.depth(ray);
         let sigma = self.truncation.sigma();
         // z / z_ground = z (mᵀx̄) / λ_ground.
-        if inv > 0.0 && z * inv / ground_scale > sigma.exp() {
+        if inv > 0.0 && z * inv / ground_scale > exp(sigma) {
             self.params.ground_weight * 2.0 * sigma
         } else {
             0.0
@@ -384,7 +385,7 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
             *piece = ps[l];
         }
         // E does not see a global scale: the median λ goes back to 1.
-        let log_scales: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
+        let log_scales: Vec<f64> = soup.pieces.iter().map(|p| ln(p.lambda)).collect();
         scales::set_scales(soup, &log_scales);
         // The tables held the ground at the iteration's start; where the world's scale moved
         // enough to raise E after all, the iteration is undone.
@@ -409,14 +410,13 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
 /// nearest the median (repeated so clusters of such pieces are reached from their rim).
 /// Returns how many pieces changed.
 fn depth_tail_control(soup: &mut Soup, problem: &Problem) -> usize {
-    let limit = problem.params.max_depth_ratio.max(1.0).ln();
-    let anchor_depth =
-        |soup: &Soup, i: usize| soup.pieces[i].depth(&problem.extent_rays[i][0]).ln();
+    let limit = ln(problem.params.max_depth_ratio.max(1.0));
+    let anchor_depth = |soup: &Soup, i: usize| ln(soup.pieces[i].depth(&problem.extent_rays[i][0]));
     // The extreme log-depth of the piece (anchor and corners), NaN if any is not in front.
     let log_depth = |soup: &Soup, i: usize, centre: f64| {
         problem.extent_rays[i]
             .iter()
-            .map(|r| soup.pieces[i].depth(r).ln())
+            .map(|r| ln(soup.pieces[i].depth(r)))
             .fold(anchor_depth(soup, i), |worst, v| {
                 if !v.is_finite() || !worst.is_finite() {
                     f64::NAN
@@ -504,7 +504,7 @@ fn draw_particles(
     }
     while out.len() < count {
         let mut p = current;
-        p.lambda *= (params.scale_spread * shrink * rng.normal()).exp();
+        p.lambda *= exp(params.scale_spread * shrink * rng.normal());
         if out.len() % 2 == 0 {
             let n = p.m.norm();
             let d = Vector3::new(rng.normal(), rng.normal(), rng.normal());

@@ -75,7 +75,7 @@ use crate::camera::Intrinsics;
 use crate::flow::FlowField;
 use crate::grid::Grid;
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
-use crate::numeric::min;
+use crate::numeric::{atanh, cos, exp, hypot, ln, min, tanh};
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::BoundaryGraph;
 
@@ -878,7 +878,7 @@ fn parallax_px(piece: &Piece, inputs: &ScaleInputs, anchor: [f64; 2]) -> f64 {
         return 0.0;
     }
     let d = p.moved / p.moved.z - turned / turned.z;
-    (k.fx * k.fy).sqrt() * d.x.hypot(d.y)
+    (k.fx * k.fy).sqrt() * hypot(d.x, d.y)
 }
 
 /// Sets every piece's λ = e^(s_i), normalised so the median λ is 1.
@@ -887,11 +887,7 @@ pub fn set_scales(soup: &mut Soup, s: &[f64]) {
     sorted.sort_by(f64::total_cmp);
     let median = sorted.get(sorted.len() / 2).copied().unwrap_or(0.0);
     for (p, &v) in soup.pieces.iter_mut().zip(s) {
-        p.lambda = if v.is_finite() {
-            (v - median).exp()
-        } else {
-            1.0
-        };
+        p.lambda = if v.is_finite() { exp(v - median) } else { 1.0 };
     }
 }
 
@@ -910,7 +906,7 @@ fn segment_centres(soup: &Soup, inputs: &ScaleInputs, segment: &[usize], count: 
             inputs.intrinsics.ray(seg.anchor[0], seg.anchor[1]),
         )) / piece.lambda;
         if z.is_finite() && z > 0.0 {
-            logs[g].push(z.ln());
+            logs[g].push(ln(z));
         }
     }
     logs.into_iter()
@@ -943,7 +939,7 @@ fn solve_segments(
     let count = sizes.len();
     let sigma = problem.sigma;
     let reference = (0..count).max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
-    let band = params.band.max(1.0).ln();
+    let band = ln(params.band.max(1.0));
     let pairs = segment_pair_terms(problem, segments, params);
     let mut around: Vec<Vec<(usize, usize)>> = vec![Vec::new(); count];
     for &(g, h) in pairs.keys() {
@@ -1380,7 +1376,7 @@ fn contact_evidence(
     params: &ScaleParams,
 ) -> f64 {
     let sin = m_a.normalize().cross(&m_b.normalize()).norm();
-    let continuity = (-flow_jump(f_p, f_q) / params.flow_scale_px).exp();
+    let continuity = exp(-flow_jump(f_p, f_q) / params.flow_scale_px);
     let e = sin.max(continuity);
     if e.is_finite() {
         e.max(params.evidence_floor)
@@ -1416,7 +1412,7 @@ pub fn sampled_pairs<'e>(
 
 /// ‖f(p) − f(q)‖ in pixels: how much the flow jumps between two pixels.
 fn flow_jump(f_p: [f32; 2], f_q: [f32; 2]) -> f64 {
-    ((f_p[0] - f_q[0]) as f64).hypot((f_p[1] - f_q[1]) as f64)
+    hypot((f_p[0] - f_q[0]) as f64, (f_p[1] - f_q[1]) as f64)
 }
 
 /// A piece's surface where a boundary ray meets it, in both frames (camera-1 and camera-2
@@ -1443,7 +1439,7 @@ pub fn ray_point(piece: &Piece, ray: &Vector3<f64>) -> Option<RayPoint> {
     let x = ray * (piece.lambda / inv);
     let moved = piece.r * x + piece.t_hat * piece.lambda;
     (moved.z > 0.0).then(|| RayPoint {
-        log_depth: x.z.ln(),
+        log_depth: ln(x.z),
         moved,
         plane2: piece.r * piece.m / (piece.lambda * d),
     })
@@ -1459,7 +1455,7 @@ pub fn ray_point(piece: &Piece, ray: &Vector3<f64>) -> Option<RayPoint> {
 pub fn gaps(a: &RayPoint, b: &RayPoint) -> [f64; 2] {
     let (ab, ba) = (b.plane2.dot(&a.moved), a.plane2.dot(&b.moved));
     let g2 = if ab > 0.0 && ba > 0.0 {
-        0.5 * (ab.ln() - ba.ln())
+        0.5 * (ln(ab) - ln(ba))
     } else {
         f64::NAN
     };
@@ -1480,7 +1476,7 @@ impl TruncatedGaps {
     pub fn new(sigma: f64) -> Self {
         TruncatedGaps {
             sigma,
-            tanh_sigma: sigma.tanh(),
+            tanh_sigma: tanh(sigma),
         }
     }
 
@@ -1501,7 +1497,7 @@ impl TruncatedGaps {
         let u = (p - q) / (p + q);
         let inside = (p > 0.0) & (q > 0.0) & (u.abs() < self.tanh_sigma);
         let g2 = if self.tanh_sigma > SERIES_LIMIT && inside && u.abs() > SERIES_LIMIT {
-            u.atanh().abs()
+            atanh(u).abs()
         } else {
             let series = atanh_series(u).abs();
             if inside { series } else { sigma }
@@ -1539,7 +1535,7 @@ pub fn pair_weight(
     let flow = inputs.flow.data();
     let reliable = inputs.reliable.data();
     let (pa, pb) = (&soup.pieces[edge.a as usize], &soup.pieces[edge.b as usize]);
-    let mut w = (-(edge.colour_diff[j] as f64) / params.colour_scale).exp()
+    let mut w = exp(-(edge.colour_diff[j] as f64) / params.colour_scale)
         * contact_evidence(&pa.m, &pb.m, flow[p], flow[q], params);
     if !(reliable[p] && reliable[q]) {
         w *= params.occluded_weight;
@@ -1555,7 +1551,7 @@ pub fn pair_weight(
     };
     if let Some(ground) = lower {
         let n = ground.m.normalize();
-        if n.y.abs() > 30f64.to_radians().cos() {
+        if n.y.abs() > cos(30f64.to_radians()) {
             w *= params.support_weight;
         }
     }
@@ -1576,10 +1572,10 @@ pub fn pair_weight(
 pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Vec<f64> {
     let n = soup.pieces.len();
     let problem = build_problem(soup, inputs, params);
-    let s: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
+    let s: Vec<f64> = soup.pieces.iter().map(|p| ln(p.lambda)).collect();
     let (segment, sizes) = rigid_segments(soup, inputs, &problem, &s, params, None);
     let largest = (0..sizes.len()).max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)));
-    let step = 1.25f64.ln();
+    let step = ln(1.25);
     // Per segment: energy of its rim at offsets −step, 0, +step, and the rim's full weight.
     let mut rise = vec![[0.0f64; 3]; sizes.len()];
     let mut full = vec![0.0f64; sizes.len()];

@@ -9,6 +9,7 @@ use crate::grid::Grid;
 use crate::image::Frame;
 
 use super::Superpixels;
+use crate::numeric::exp;
 
 /// The shared boundary of superpixels `a < b`.
 #[derive(Clone, Debug, PartialEq)]
@@ -158,7 +159,7 @@ fn knn_by<const D: usize>(
                 .map(|&(_, j)| {
                     let (a, b) = (image_anchors[i], image_anchors[j as usize]);
                     let d = ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt();
-                    (j, (-beta * d).exp())
+                    (j, exp(-beta * d))
                 })
                 .collect()
         })

@@ -12,6 +12,7 @@ use crate::grid::Grid;
 use crate::image::{Frame, to_lab_planes};
 
 use super::{Segment, Superpixels};
+use crate::numeric::ln_f32;
 
 /// SLIC parameters.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -122,7 +123,7 @@ fn seed_grid(w: usize, h: usize, count: usize, step: f32) -> (usize, usize) {
     let by_columns = fit(w as f32 / step, w, h);
     let by_rows = fit(h as f32 / step, h, w).map(|(ny, nx)| (nx, ny));
     let miss = |&(nx, ny): &(usize, usize)| (nx * ny).abs_diff(count);
-    let skew = |&(nx, ny): &(usize, usize)| ((w * ny) as f32 / (h * nx) as f32).ln().abs();
+    let skew = |&(nx, ny): &(usize, usize)| ln_f32((w * ny) as f32 / (h * nx) as f32).abs();
     by_columns
         .into_iter()
         .chain(by_rows)

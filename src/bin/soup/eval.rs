@@ -19,6 +19,7 @@ use superpixel_soup::soup::{Soup, refine};
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
 
 use crate::params::{PipelineArgs, all_defaults_help};
+use superpixel_soup::numeric::{exp, ln};
 
 /// Run the reconstruction on cases in the evaluation layout and score the depth.
 #[derive(clap::Args)]
@@ -301,7 +302,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     let labels = &rec.superpixels.labels;
     let (w, h) = gt.size();
     let oracle_ratios = piece_log_ratios(rec, &rec.unit_soup, gt, &k_in);
-    let solved: Vec<f64> = rec.soup.pieces.iter().map(|p| p.lambda.ln()).collect();
+    let solved: Vec<f64> = rec.soup.pieces.iter().map(|p| ln(p.lambda)).collect();
     let oracle: Vec<f64> = oracle_ratios
         .iter()
         .zip(&solved)
@@ -331,7 +332,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     // The scale energy over per-piece log-scales of the unit-scale soup's planes and motions.
     let problem = scales::build_problem(&rec.unit_soup, &inputs, &params.scales);
     let scaled = &rec.scaled_soup;
-    let solution: Vec<f64> = scaled.pieces.iter().map(|p| p.lambda.ln()).collect();
+    let solution: Vec<f64> = scaled.pieces.iter().map(|p| ln(p.lambda)).collect();
     let mut polished = oracle.clone();
     scales::polish(&problem, &mut polished, 50);
     let as_segments = |descend| {
@@ -383,7 +384,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
         .iter()
         .enumerate()
         .filter_map(|(i, r)| {
-            let ratio = (shift - (*r)?).exp();
+            let ratio = exp(shift - (*r)?);
             let px = rec.superpixels.segments[i].pixels.len() as f64;
             Some(((ratio - 1.0).abs() * px, i, ratio))
         })
