@@ -1714,6 +1714,16 @@ mod tests {
         }
     }
 
+    /// World pieces 0–1–2 in a chain of certain contacts that meet at equal scale, and piece 3
+    /// touching them only through `contact` (a link of piece 3 and piece 0).
+    fn world_and_one_piece(contact: Link) -> Problem {
+        Problem {
+            links: vec![link(0, 1, 1.0, 0.0), link(1, 2, 1.0, 0.0), contact],
+            touching: vec![vec![0, 2], vec![0, 1], vec![1], vec![2]],
+            sigma: 0.1,
+        }
+    }
+
     /// Segment 0 (the world, pieces 0–2, on the ego-motion) and a one-piece mover (piece 3, on
     /// a motion of its own). The mover's contact with world piece 0 would hold it 1
     /// (log-scale) behind, its contact with piece 1 (`mover_to_1`, weight 0.45, gap c = 0.3)
@@ -1743,15 +1753,7 @@ mod tests {
         // The truth test's start can put a one-piece segment far from the rest (its contact
         // would hold it at δ = 5, past the band of ln 12); the solve from there must stay in
         // the band the solve's own starts keep to, or the two objectives are not comparable.
-        let problem = Problem {
-            links: vec![
-                link(0, 1, 1.0, 0.0),
-                link(1, 2, 1.0, 0.0),
-                link(3, 0, 0.5, -5.0),
-            ],
-            touching: vec![vec![0, 2], vec![0, 1], vec![1], vec![0]],
-            sigma: 0.1,
-        };
+        let problem = world_and_one_piece(link(3, 0, 0.5, -5.0));
         let segments = segments_of(&[0, 0, 0, 1], &[0.0, 0.0], &[true, false]);
         // Without the figure prior, which would pull the segment in front by itself.
         let params = ScaleParams {
@@ -1917,15 +1919,7 @@ mod tests {
         // piece 0, holds it 1 (log-scale) behind at weight 0.02: less than the static prior's
         // 0.05 for one piece. On the ego-motion it takes the world's scale; on a motion of its
         // own, or without the prior, its contact places it.
-        let problem = Problem {
-            links: vec![
-                link(0, 1, 1.0, 0.0),
-                link(1, 2, 1.0, 0.0),
-                link(3, 0, 0.02, -1.0),
-            ],
-            touching: vec![vec![0, 2], vec![0, 1], vec![1], vec![2]],
-            sigma: 0.1,
-        };
+        let problem = world_and_one_piece(link(3, 0, 0.02, -1.0));
         let centre = [0.3, -0.4];
         let placement = |static_weight, on_ego| {
             let params = ScaleParams {
