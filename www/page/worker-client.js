@@ -60,7 +60,14 @@ function buildStageList(stages) {
   }));
 }
 
+/** Index of the furthest stage reached in this run: a later stage start before it is a new pass. */
+let furthestStage = -1;
+/** Passes of the pipeline in this run (a second one is made from finer flow; see showProgress). */
+let passes = 1;
+
 export function resetProgress() {
+  furthestStage = -1;
+  passes = 1;
   $('progress').value = 0;
   for (const item of $('stages').children) {
     item.className = '';
@@ -71,6 +78,12 @@ export function resetProgress() {
 function showProgress(stage, fraction) {
   const items = [...$('stages').children];
   const index = items.findIndex((item) => item.dataset.stage === stage);
+  // The pipeline starts over from the flow when too few of the scales were pinned: say so
+  // rather than let the bar run back without a word.
+  if (index < furthestStage) {
+    passes += 1;
+  }
+  furthestStage = index;
   const weight = (s) => STAGE_WEIGHTS[s] ?? 1 / items.length;
   let done = 0;
   items.forEach((item, i) => {
@@ -81,7 +94,8 @@ function showProgress(stage, fraction) {
   });
   const total = items.reduce((sum, item) => sum + weight(item.dataset.stage), 0);
   $('progress').value = Math.min(1, (done + weight(stage) * fraction) / total);
-  setStatus(`${STAGE_LABELS[stage] ?? stage}…`);
+  const again = passes > 1 ? ' (again with finer flow: the first pass left most scales unknown)' : '';
+  setStatus(`${STAGE_LABELS[stage] ?? stage}${again}…`);
 }
 
 /** Runs the reconstruction on the current frames with the form's options. */
