@@ -3,7 +3,7 @@
 // parameters, the time of each pipeline stage in the worker, and the peak memory of the tab;
 // plus how fast the page and its worker load.
 //
-//   node benches/page.mjs [--runs 3] [--no-loading]
+//   node benches/page.mjs [--runs 3] [--no-loading] [--scene street]
 //
 // Needs the release wasm in www/pkg (scripts/build-web.sh); builds the `soup` CLI (release) to
 // render the inputs with `soup synth`:
@@ -12,7 +12,9 @@
 //   (quality 0.92), like a phone's 12-megapixel photos; the page decodes them to the working
 //   size (long side 1024);
 // - 6000×4000 (24 megapixels): the street rendered at 1500×1000, upscaled 4× the same way.
-// `--no-loading` skips the page-load rows (the memory and end-to-end rows only).
+// `--no-loading` skips the page-load rows (the memory and end-to-end rows only). `--scene` renders
+// another synthetic scene instead of the street (`soup synth --help` lists them; the crowd, whose
+// first pass with the page's flow pins too few scales, shows what a second pass costs).
 // Each run uses a fresh browser. The photos are picked as files on disk, as a person picks them
 // (Playwright given buffers instead passes them through the page's JavaScript heap as base64:
 // about 100 MiB of garbage in the renderer for the 24 MP pair). Times are the minimum over runs;
@@ -34,9 +36,14 @@ import { parseArgs } from 'node:util';
 import { ROOT, launchBrowser, startServer } from '../tests/e2e/browser.mjs';
 
 const { values } = parseArgs({
-  options: { runs: { type: 'string', default: '3' }, 'no-loading': { type: 'boolean', default: false } },
+  options: {
+    runs: { type: 'string', default: '3' },
+    'no-loading': { type: 'boolean', default: false },
+    scene: { type: 'string', default: 'street' },
+  },
 });
 const runs = Number(values.runs);
+const scene = values.scene;
 
 const work = mkdtempSync(path.join(tmpdir(), 'soup-page-bench-'));
 const soup = (...args) => {
@@ -48,10 +55,10 @@ const soup = (...args) => {
     throw new Error(`soup ${args.join(' ')} failed`);
   }
 };
-soup('synth', path.join(work, 'small'), '--scene', 'street', '--size', '1024x436');
-soup('synth', path.join(work, 'photo'), '--scene', 'street', '--size', '1008x756');
-soup('synth', path.join(work, 'photo24'), '--scene', 'street', '--size', '1500x1000');
-const png = (dir, name) => readFileSync(path.join(work, dir, 'street', name));
+soup('synth', path.join(work, 'small'), '--scene', scene, '--size', '1024x436');
+soup('synth', path.join(work, 'photo'), '--scene', scene, '--size', '1008x756');
+soup('synth', path.join(work, 'photo24'), '--scene', scene, '--size', '1500x1000');
+const png = (dir, name) => readFileSync(path.join(work, dir, scene, name));
 
 const server = await startServer();
 
@@ -198,7 +205,7 @@ const rows = [];
 const stageRows = [];
 try {
   const cases = [
-    ['1024×436 PNG pair (street)', ['frame1.png', 'frame2.png'].map((name) => path.join(work, 'small', 'street', name))],
+    [`1024×436 PNG pair (${scene})`, ['frame1.png', 'frame2.png'].map((name) => path.join(work, 'small', scene, name))],
   ];
   {
     const browser = await launchBrowser();
@@ -213,7 +220,7 @@ try {
         return file;
       });
       cases.push([
-        `${width}×${height} JPEG pair (${label}, street upscaled; ${(jpegs[0].length / 2 ** 20).toFixed(1)} MB each)`,
+        `${width}×${height} JPEG pair (${label}, ${scene} upscaled; ${(jpegs[0].length / 2 ** 20).toFixed(1)} MB each)`,
         files,
       ]);
     }

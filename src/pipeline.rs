@@ -124,9 +124,12 @@ pub struct Report {
     pub working_size: (usize, usize),
     pub input_size: (usize, usize),
     pub params: Params,
+    /// Milliseconds per stage, summed over every pass the run made (see
+    /// [`Params::min_pinned_share`]).
     pub timings_ms: Vec<(Stage, f64)>,
     /// Parameters of the computed flow that was kept (a finer preset than the one asked for when
-    /// too little of that passed its check: see `notes`); `None` when the flow was given.
+    /// too little of that passed its check, or when a pass from it pinned too few scales: see
+    /// `notes`); `None` when the flow was given.
     pub flow: Option<FlowParams>,
     /// Share of the working-resolution pixels whose flow is trusted.
     pub reliable_flow: f64,
@@ -203,8 +206,8 @@ impl Reconstruction {
 ///
 /// With computed flow, a reconstruction whose scales are pinned on less than
 /// [`Params::min_pinned_share`] of the image is made again from the flow of the next finer
-/// preset (the stages report their progress again from the flow on), and the pass that pins
-/// more is kept; notes say so.
+/// preset, and the pass that pins most is kept (the stages report their progress again from
+/// the flow on; notes say what happened, and the stage times are summed over the passes).
 pub fn reconstruct(
     pair: &FramePair,
     flow: FlowInput,
@@ -221,51 +224,99 @@ pub fn reconstruct(
             )));
         }
     }
-    let flow_params = match flow {
-        FlowInput::Given(given) => {
-            return reconstruct_from(pair, Flow::Given(given), params, progress);
+    match flow {
+        FlowInput::Given(given) => reconstruct_from(pair, Flow::Given(given), params, progress),
+        FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, params, progress),
+    }
+}
+
+/// One pass of [`reconstruct_from`] with computed flow, as [`reconstruct_until_pinned`] weighs it.
+#[derive(Clone, Copy)]
+struct Pass {
+    /// The flow parameters the pass was asked for (they make the same pass again).
+    asked: FlowParams,
+    /// The flow parameters it used (finer than `asked` when too little of that flow was trusted).
+    used: FlowParams,
+    /// Its [`pinned_share`].
+    pinned: f64,
+}
+
+impl Pass {
+    fn of(rec: &Reconstruction, asked: FlowParams) -> Self {
+        Pass {
+            asked,
+            used: rec.report.flow.unwrap_or(asked),
+            pinned: pinned_share(rec),
         }
-        FlowInput::Compute(flow_params) => flow_params,
-    };
-    let mut best = reconstruct_from(pair, Flow::Compute(flow_params), params, progress)?;
-    let mut last = best.report.flow.unwrap_or(flow_params);
-    let mut last_share = pinned_share(&best);
-    let mut spent = best.report.timings_ms.clone();
-    let mut notes = Vec::new();
-    while let Some(finer) = last
-        .finer()
-        .filter(|_| last_share < params.min_pinned_share)
-    {
+    }
+}
+
+/// Passes of [`reconstruct_from`] from the flow of `first`, then of the next finer preset while
+/// the last pass pins less than [`Params::min_pinned_share`]: flow too coarse to show where
+/// movers meet the world leaves their scales to guesses. Returns the pass that pins most (the
+/// earliest on a tie), with the notes of every pass in the order they ran and its stage times
+/// summed over all of them. Only one finished pass is held: an earlier pass that pins more than
+/// the later ones is made again at the end (the pipeline is deterministic), so the memory is
+/// that of one reconstruction and one running pass (the page's budget). A later pass that fails
+/// leaves the best one so far, with a note.
+fn reconstruct_until_pinned(
+    pair: &FramePair,
+    first: FlowParams,
+    params: &Params,
+    progress: &mut dyn FnMut(Stage, f32),
+) -> Result<Reconstruction> {
+    let first_pass = reconstruct_from(pair, Flow::Compute(first), params, progress)?;
+    let (mut best, mut last) = (Pass::of(&first_pass, first), Pass::of(&first_pass, first));
+    let mut notes = first_pass.report.notes.clone();
+    let mut spent = first_pass.report.timings_ms.clone();
+    let mut held = Some(first_pass);
+    while let Some(finer) = (last.used.finer()).filter(|_| last.pinned < params.min_pinned_share) {
         notes.push(format!(
             "the scales of only {:.0} % of the image were pinned with the flow of preset {}; \
              reconstructed again with preset {}",
-            100.0 * last_share,
-            preset_name(&last),
+            100.0 * last.pinned,
+            preset_name(&last.used),
             preset_name(&finer),
         ));
-        let again = reconstruct_from(pair, Flow::Compute(finer), params, progress)?;
-        let share = pinned_share(&again);
-        spent.extend_from_slice(&again.report.timings_ms);
-        (last, last_share) = (again.report.flow.unwrap_or(finer), share);
-        if share > pinned_share(&best) {
-            best = again;
+        // One finished pass at a time: the best one so far is made again if it stays the best.
+        held = None;
+        match reconstruct_from(pair, Flow::Compute(finer), params, progress) {
+            Ok(again) => {
+                notes.extend_from_slice(&again.report.notes[pair.notes.len()..]);
+                spent.extend_from_slice(&again.report.timings_ms);
+                last = Pass::of(&again, finer);
+                if last.pinned > best.pinned {
+                    (best, held) = (last, Some(again));
+                }
+            }
+            Err(e) => {
+                notes.push(format!(
+                    "reconstructing again with preset {} failed: {e}",
+                    preset_name(&finer)
+                ));
+                break;
+            }
         }
     }
-    if !notes.is_empty() {
-        let kept = best.report.flow.unwrap_or(flow_params);
-        if kept != last {
+    let mut kept = match held {
+        Some(rec) => rec,
+        None => {
             notes.push(format!(
-                "kept the reconstruction from preset {} ({:.0} % pinned; {:.0} % with preset {})",
-                preset_name(&kept),
-                100.0 * pinned_share(&best),
-                100.0 * last_share,
-                preset_name(&last),
+                "kept the reconstruction from preset {} ({:.0} % pinned; {:.0} % with preset {}), \
+                 made again",
+                preset_name(&best.used),
+                100.0 * best.pinned,
+                100.0 * last.pinned,
+                preset_name(&last.used),
             ));
+            let again = reconstruct_from(pair, Flow::Compute(best.asked), params, progress)?;
+            spent.extend_from_slice(&again.report.timings_ms);
+            again
         }
-        best.report.notes.extend(notes);
-        best.report.timings_ms = summed_by_stage(&spent);
-    }
-    Ok(best)
+    };
+    kept.report.notes = notes;
+    kept.report.timings_ms = summed_by_stage(&spent);
+    Ok(kept)
 }
 
 /// The name of `params`' preset, or "custom".
@@ -273,8 +324,8 @@ fn preset_name(params: &FlowParams) -> &'static str {
     params.named_preset().map_or("custom", Preset::name)
 }
 
-/// Share of the working-resolution pixels of `rec` whose superpixel's scale is pinned (its
-/// `scale_confidence` at least `scales.min_confidence` of the parameters it was made with).
+/// Share in [0, 1] of the working-resolution pixels of `rec` whose superpixel's scale is pinned
+/// (its `scale_confidence` at least `scales.min_confidence` of the parameters it was made with).
 pub fn pinned_share(rec: &Reconstruction) -> f64 {
     let min = rec.report.params.scales.min_confidence;
     let pinned: usize = (rec.superpixels.segments.iter())

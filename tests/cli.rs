@@ -140,10 +140,15 @@ fn reconstruct_writes_the_documented_files() {
     assert_eq!(report["camera"]["source"], "user");
     // Without a flow file the flow is computed; the report records its parameters. (Kept at the
     // preset asked for: at this size less than 75 % of the fast flow passes its check, which
-    // would have it computed again with the next preset.)
+    // would have it computed again with the next preset, and no second pass is asked for where
+    // too few scales are pinned.)
     let computed = dir.join("computed");
     let keep_preset = dir.join("keep-preset.json");
-    std::fs::write(&keep_preset, r#"{"min_reliable_flow": 0.0}"#).unwrap();
+    std::fs::write(
+        &keep_preset,
+        r#"{"min_reliable_flow": 0.0, "min_pinned_share": 0.0}"#,
+    )
+    .unwrap();
     soup_ok(&[
         "reconstruct",
         &path("frame1.png"),
