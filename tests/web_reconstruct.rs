@@ -80,17 +80,37 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
         Some(progress.as_ref().unchecked_ref::<Function>().clone()),
     )
     .unwrap();
-    assert_eq!(
-        *stages.borrow(),
-        [
-            "flow",
-            "superpixels",
-            "motion",
-            "scales",
-            "refine",
-            "outputs"
-        ]
+    // Every pass reports the stages in order; a pass beyond the first (from finer flow, where
+    // too few scales were pinned: at this size the street takes one) has a note of its own.
+    let order = [
+        "flow",
+        "superpixels",
+        "motion",
+        "scales",
+        "refine",
+        "outputs",
+    ];
+    let stages = stages.borrow();
+    assert!(
+        !stages.is_empty() && stages.len().is_multiple_of(order.len()),
+        "{stages:?}"
     );
+    assert!(
+        stages.chunks(order.len()).all(|pass| pass == order),
+        "{stages:?}"
+    );
+    let report: serde_json::Value = serde_json::from_str(&result.report().unwrap()).unwrap();
+    let again = report["notes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|n| {
+            let n = n.as_str().unwrap();
+            n.contains("reconstructed again") || n.contains("made again")
+        })
+        .count();
+    assert_eq!(stages.len() / order.len(), 1 + again, "{report}");
+    drop(stages);
     // Working size 128 × 55 (downscaled from 192 × 82).
     let (w, h) = (result.width() as usize, result.height() as usize);
     assert_eq!((w, h), (128, 55));
@@ -132,7 +152,6 @@ fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
     );
     assert!(result.export_file("depth.exr").is_err());
 
-    let report: serde_json::Value = serde_json::from_str(&result.report().unwrap()).unwrap();
     assert_eq!(report["input_size"], serde_json::json!([192, 82]));
     assert_eq!(report["camera"]["source"], "default");
     assert_eq!(report["params"]["superpixels"]["count"], 150);
