@@ -225,7 +225,9 @@ pub fn reconstruct(
         }
     }
     match flow {
-        FlowInput::Given(given) => reconstruct_from(pair, Flow::Given(given), params, progress),
+        FlowInput::Given(given) => {
+            reconstruct_from(pair, FlowInput::Given(given), params, progress)
+        }
         FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, params, progress),
     }
 }
@@ -265,8 +267,9 @@ fn reconstruct_until_pinned(
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
-    let first_pass = reconstruct_from(pair, Flow::Compute(first), params, progress)?;
-    let (mut best, mut last) = (Pass::of(&first_pass, first), Pass::of(&first_pass, first));
+    let first_pass = reconstruct_from(pair, FlowInput::Compute(first), params, progress)?;
+    let mut best = Pass::of(&first_pass, first);
+    let mut last = best;
     let mut notes = first_pass.report.notes.clone();
     let mut spent = first_pass.report.timings_ms.clone();
     let mut held = Some(first_pass);
@@ -280,7 +283,7 @@ fn reconstruct_until_pinned(
         ));
         // One finished pass at a time: the best one so far is made again if it stays the best.
         held = None;
-        match reconstruct_from(pair, Flow::Compute(finer), params, progress) {
+        match reconstruct_from(pair, FlowInput::Compute(finer), params, progress) {
             Ok(again) => {
                 notes.extend_from_slice(&again.report.notes[pair.notes.len()..]);
                 spent.extend_from_slice(&again.report.timings_ms);
@@ -309,7 +312,7 @@ fn reconstruct_until_pinned(
                 100.0 * last.pinned,
                 preset_name(&last.used),
             ));
-            let again = reconstruct_from(pair, Flow::Compute(best.asked), params, progress)?;
+            let again = reconstruct_from(pair, FlowInput::Compute(best.asked), params, progress)?;
             spent.extend_from_slice(&again.report.timings_ms);
             again
         }
@@ -348,17 +351,11 @@ fn summed_by_stage(laps: &[(Stage, f64)]) -> Vec<(Stage, f64)> {
         .collect()
 }
 
-/// Where one pass of [`reconstruct_from`] takes its flow.
-enum Flow {
-    Given(FlowField),
-    Compute(FlowParams),
-}
-
 /// One pass of the pipeline: flow (given, or computed by [`trusted_flow`]), superpixels,
 /// unit-scale soup, scales, refinement and outputs.
 fn reconstruct_from(
     pair: &FramePair,
-    flow: Flow,
+    flow: FlowInput,
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
@@ -370,12 +367,12 @@ fn reconstruct_from(
 
     progress(Stage::Flow, 0.0);
     let (flow, reliable, flow_params) = match flow {
-        Flow::Given(given) => {
+        FlowInput::Given(given) => {
             let flow = resize_flow(&given, w, h);
             let reliable = flow.map(|&f| is_known(f));
             (flow, reliable, None)
         }
-        Flow::Compute(flow_params) => {
+        FlowInput::Compute(flow_params) => {
             let (computed, used) = trusted_flow(
                 pair,
                 flow_params,
