@@ -1385,9 +1385,11 @@ fn contact_evidence(
     }
 }
 
-/// The boundary pairs of `edge` that the contact terms use (at most `pairs_per_boundary`,
-/// evenly spaced): each pair's index in the edge and the ray (normalised, z = 1) through the
-/// midpoint of its two pixels.
+/// The boundary pairs of `edge` that the contact terms use, each with the ray (normalised,
+/// z = 1) through the midpoint of its two pixels. A boundary of at most `pairs_per_boundary`
+/// pairs uses them all; a longer one uses as many as every ⌈len / pairs_per_boundary⌉-th pair
+/// would give, spread evenly over its side-by-side pairs and its stacked pairs in proportion
+/// to their counts ([`sample_indices`]).
 pub fn sampled_pairs<'e>(
     edge: &'e crate::superpixels::graph::BoundaryEdge,
     inputs: &ScaleInputs<'e>,
@@ -1395,12 +1397,10 @@ pub fn sampled_pairs<'e>(
 ) -> impl Iterator<Item = (usize, Vector3<f64>)> + 'e {
     let width = inputs.superpixels.labels.width();
     let k = *inputs.intrinsics;
-    let step = edge.pairs.len().div_ceil(params.pairs_per_boundary.max(1));
-    edge.pairs
-        .iter()
-        .enumerate()
-        .step_by(step.max(1))
-        .map(move |(j, &(p, q))| {
+    sample_indices(&edge.pairs, width, params.pairs_per_boundary)
+        .into_iter()
+        .map(move |j| {
+            let (p, q) = edge.pairs[j];
             let (p, q) = (p as usize, q as usize);
             let mid = [
                 (p % width + q % width) as f64 * 0.5,
@@ -1408,6 +1408,43 @@ pub fn sampled_pairs<'e>(
             ];
             (j, Vector3::from(k.ray(mid[0], mid[1])))
         })
+}
+
+/// Indices (ascending) of the pairs of one boundary that its contact terms sample: all of them
+/// up to `per_boundary`, else ⌈len / ⌈len / per_boundary⌉⌉ of them, shared between
+/// side-by-side pairs (q = p + 1) and stacked pairs (q = p + width) in proportion to their
+/// counts and evenly spaced within each kind. The pairs come in scan order, where a slanted
+/// boundary alternates the two kinds, so a plain stride would take only one kind whenever it
+/// is even; only stacked pairs carry ground support (`pair_weight`), so which kind the stride
+/// took used to change a boundary's weight with the parity of its length (the flag moved by
+/// 0.054 between 10 and 12 pairs per boundary).
+fn sample_indices(pairs: &[(u32, u32)], width: usize, per_boundary: usize) -> Vec<usize> {
+    let len = pairs.len();
+    let per_boundary = per_boundary.max(1);
+    if len <= per_boundary {
+        return (0..len).collect();
+    }
+    let count = len.div_ceil(len.div_ceil(per_boundary));
+    let (stacked, side): (Vec<usize>, Vec<usize>) =
+        (0..len).partition(|&j| pairs[j].1 as usize == pairs[j].0 as usize + width);
+    // Rounded share of the stacked kind, at least one of each kind present.
+    let mut n_stacked = (count * stacked.len() + len / 2) / len;
+    if !stacked.is_empty() {
+        n_stacked = n_stacked.max(1);
+    }
+    if !side.is_empty() {
+        n_stacked = n_stacked.min(count - 1);
+    }
+    let evenly = |kind: &[usize], n: usize| -> Vec<usize> {
+        let n = n.min(kind.len());
+        (0..n)
+            .map(|i| kind[(2 * i + 1) * kind.len() / (2 * n)])
+            .collect()
+    };
+    let mut picked = evenly(&stacked, n_stacked);
+    picked.extend(evenly(&side, count - n_stacked));
+    picked.sort_unstable();
+    picked
 }
 
 /// ‖f(p) − f(q)‖ in pixels: how much the flow jumps between two pixels.
@@ -1615,6 +1652,53 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
 mod tests {
     use super::*;
     use crate::rng::Rng;
+
+    #[test]
+    fn a_slanted_boundary_samples_both_kinds_of_pair_in_proportion() {
+        // A 45° staircase in scan order on a 100-pixel-wide image: per row a side-by-side pair
+        // (p, p + 1), then a stacked pair (p, p + 100), as `boundary_graph` lists them.
+        let width = 100;
+        let stair = |rows: usize| -> Vec<(u32, u32)> {
+            (0..rows)
+                .flat_map(|y| {
+                    let p = (y * width + 10 + y) as u32;
+                    [(p, p + 1), (p + 1, p + 1 + width as u32)]
+                })
+                .collect()
+        };
+        let stacked = |pairs: &[(u32, u32)], picked: &[usize]| {
+            picked
+                .iter()
+                .filter(|&&j| pairs[j].1 == pairs[j].0 + width as u32)
+                .count()
+        };
+        for (rows, per_boundary) in [(12, 12), (12, 10), (15, 12), (20, 12), (9, 4), (40, 14)] {
+            let pairs = stair(rows);
+            let len = pairs.len();
+            let picked = sample_indices(&pairs, width, per_boundary);
+            // As many as a stride of ⌈len / per_boundary⌉ gives, ascending, distinct, in range.
+            assert_eq!(picked.len(), len.div_ceil(len.div_ceil(per_boundary)));
+            assert!(picked.windows(2).all(|w| w[0] < w[1]) && picked[picked.len() - 1] < len);
+            // Half of them stacked (a plain even stride took none).
+            let half = picked.len() as f64 / 2.0;
+            let n = stacked(&pairs, &picked) as f64;
+            assert!(
+                (n - half).abs() <= 0.5,
+                "{rows} rows, {per_boundary}: {n} of {picked:?}"
+            );
+        }
+        // A short boundary keeps every pair; one of a single kind is spread evenly over it.
+        let short = stair(5);
+        assert_eq!(
+            sample_indices(&short, width, 12),
+            (0..10).collect::<Vec<_>>()
+        );
+        let row: Vec<(u32, u32)> = (0..30u32).map(|x| (x, x + width as u32)).collect();
+        assert_eq!(
+            sample_indices(&row, width, 12),
+            vec![1, 4, 7, 10, 13, 16, 19, 22, 25, 28]
+        );
+    }
 
     #[test]
     fn contact_sums_are_minimised_exactly() {
