@@ -1389,7 +1389,7 @@ fn contact_evidence(
 /// z = 1) through the midpoint of its two pixels. A boundary of at most `pairs_per_boundary`
 /// pairs uses them all; a longer one uses as many as every ⌈len / pairs_per_boundary⌉-th pair
 /// would give, spread evenly over its side-by-side pairs and its stacked pairs in proportion
-/// to their counts ([`sample_indices`]).
+/// to their counts (see `sample_indices`).
 pub fn sampled_pairs<'e>(
     edge: &'e crate::superpixels::graph::BoundaryEdge,
     inputs: &ScaleInputs<'e>,
