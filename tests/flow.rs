@@ -2,6 +2,8 @@
 //! scenes' exact flow, the forward–backward mask around a moving box, bad input, determinism, and
 //! the flow source of the pipeline.
 #![cfg(not(target_arch = "wasm32"))]
+// Tests make no results: the platform's maths functions are fine here (clippy.toml).
+#![allow(clippy::disallowed_methods)]
 
 use superpixel_soup::error::Error;
 use superpixel_soup::eval::{eval_case_dir, flow_metrics};

@@ -1,6 +1,8 @@
 //! The soup: the contact scale solve on a hand-built soup, the refinement's energy, end-to-end
 //! accuracy on synthetic scenes with exact and computed flow, and the no-parallax errors.
 #![cfg(not(target_arch = "wasm32"))]
+// Tests make no results: the platform's maths functions are fine here (clippy.toml).
+#![allow(clippy::disallowed_methods)]
 
 use nalgebra::{Matrix3, Vector3};
 use superpixel_soup::camera::Intrinsics;

@@ -422,7 +422,7 @@ fn piece_log_ratios(
     let key = |x: usize, y: usize| nearest_label(labels, w, h, x, y);
     oracle_ratios(&depth, gt, &key, soup.pieces.len())
         .into_iter()
-        .map(|r| r.map(f64::ln))
+        .map(|r| r.map(ln))
         .collect()
 }
 
