@@ -1,5 +1,6 @@
-//! Accuracy metrics against ground truth, as docs/ARCHITECTURE.md (Measuring) defines them, and
-//! where the evaluation data is read from ([`eval_case_dir`]).
+//! Accuracy metrics against ground truth, as docs/ARCHITECTURE.md (Measuring) defines them,
+//! where the evaluation data is read from ([`eval_case_dir`]), and the truth test's oracle of
+//! every piece's true state from exact scene flow ([`true_states`]).
 //!
 //! Depth is known only up to one global scale, so every depth metric first aligns the estimate:
 //! - MRE and δ<1.25 use s = median(z_gt / z) over pixels valid in both maps;
@@ -9,12 +10,16 @@
 
 use std::path::PathBuf;
 
+use nalgebra::{Matrix3, Vector3};
 use serde::Serialize;
 
+use crate::camera::Intrinsics;
 use crate::error::{Error, Result};
 use crate::flow::{FlowField, is_known};
 use crate::grid::Grid;
 use crate::numeric::hypot;
+use crate::output::nearest_label;
+use crate::soup::{Piece, Soup};
 
 /// Depth accuracy of an estimate against ground truth.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
@@ -228,6 +233,86 @@ pub fn eval_case_dir(name: &str) -> Option<PathBuf> {
     dir.is_dir().then_some(dir)
 }
 
+/// The true state of every piece of `soup` from exact scene flow (our synthetic scenes): per
+/// superpixel (`labels`, at any resolution: each pixel of the truth takes the nearest label),
+/// the rigid motion that best moves its pixels' true 3D points at time 1 (camera-1 frame, from
+/// `depth1`) onto theirs at time 2 (camera-2 frame, from `flow12` and `depth12`: the z-depth in
+/// camera 2 of frame 1's point) by least squares (Kabsch), and the least-squares plane through
+/// the first, at the truth's metric scale (λ = |t|). `k` is the intrinsics of the truth's
+/// resolution. A piece with fewer than 8 such pixels, or no translation, keeps its state in
+/// `soup`. The truth test's oracle: the refinement's energy at these states says whether the
+/// energy or the optimiser is at fault.
+pub fn true_states(
+    soup: &Soup,
+    labels: &Grid<u32>,
+    depth1: &Grid<f32>,
+    flow12: &FlowField,
+    depth12: &Grid<f32>,
+    k: &Intrinsics,
+) -> Soup {
+    let (w, h) = depth1.size();
+    let mut points = vec![Vec::new(); soup.pieces.len()];
+    for y in 0..h {
+        for x in 0..w {
+            let (f, a, b) = (*flow12.get(x, y), *depth1.get(x, y), *depth12.get(x, y));
+            if is_known(f) && a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0 {
+                let p1 = Vector3::from(k.ray(x as f64, y as f64)) * f64::from(a);
+                let (x2, y2) = (x as f64 + f64::from(f[0]), y as f64 + f64::from(f[1]));
+                let p2 = Vector3::from(k.ray(x2, y2)) * f64::from(b);
+                if let Some(list) = points.get_mut(nearest_label(labels, w, h, x, y)) {
+                    list.push((p1, p2));
+                }
+            }
+        }
+    }
+    let mut out = soup.clone();
+    for (piece, pairs) in out.pieces.iter_mut().zip(&points) {
+        if let Some(state) = rigid_state(pairs) {
+            *piece = Piece {
+                degenerate: piece.degenerate,
+                hypothesis: piece.hypothesis,
+                ..state
+            };
+        }
+    }
+    out
+}
+
+/// The rigid motion X' = R X + t moving the first points of `pairs` onto the second (Kabsch:
+/// least squares over rotations), and the least-squares plane mᵀX = 1 through the first, as a
+/// piece's state at λ = |t|. `None` for fewer than 8 pairs, no translation or a degenerate fit.
+pub fn rigid_state(pairs: &[(Vector3<f64>, Vector3<f64>)]) -> Option<Piece> {
+    if pairs.len() < 8 {
+        return None;
+    }
+    let n = pairs.len() as f64;
+    let c1 = pairs.iter().map(|p| p.0).sum::<Vector3<f64>>() / n;
+    let c2 = pairs.iter().map(|p| p.1).sum::<Vector3<f64>>() / n;
+    let cov: Matrix3<f64> = (pairs.iter())
+        .map(|(p, q)| (q - c2) * (p - c1).transpose())
+        .sum();
+    let svd = cov.svd(true, true);
+    let (u, v_t) = (svd.u?, svd.v_t?);
+    let flip = if (u * v_t).determinant() < 0.0 {
+        -1.0
+    } else {
+        1.0
+    };
+    let r = u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, flip)) * v_t;
+    let t = c2 - r * c1;
+    let ata: Matrix3<f64> = pairs.iter().map(|(p, _)| p * p.transpose()).sum();
+    let m = ata.try_inverse()? * pairs.iter().map(|p| p.0).sum::<Vector3<f64>>();
+    let lambda = t.norm();
+    (lambda > 1e-9 && m.iter().all(|c| c.is_finite())).then(|| Piece {
+        r,
+        t_hat: t / lambda,
+        m: m * lambda,
+        lambda,
+        hypothesis: 0,
+        degenerate: None,
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -311,5 +396,75 @@ mod tests {
     fn median_picks_the_middle() {
         assert_eq!(median(vec![3.0, 1.0, 2.0]), 2.0);
         assert_eq!(median(vec![4.0, 1.0, 2.0, 3.0]), 3.0);
+    }
+
+    /// A plane z = 4 + 0.3 x seen by the `k` camera, each half of the image (label 0 left, 1
+    /// right) moved by its own rigid motion; returns labels, depth1, flow12 and depth12.
+    #[allow(clippy::type_complexity)]
+    fn two_motion_scene(
+        k: &Intrinsics,
+        motions: &[(Matrix3<f64>, Vector3<f64>); 2],
+    ) -> (Grid<u32>, Grid<f32>, FlowField, Grid<f32>) {
+        let (w, h) = (24, 16);
+        let labels = Grid::from_fn(w, h, |x, _| u32::from(x >= w / 2));
+        let mut depth1 = Grid::filled(w, h, f32::NAN);
+        let mut flow = Grid::filled(w, h, [f32::NAN; 2]);
+        let mut depth12 = Grid::filled(w, h, f32::NAN);
+        for y in 0..h {
+            for x in 0..w {
+                let ray = Vector3::from(k.ray(x as f64, y as f64));
+                let z = 4.0 / (1.0 - 0.3 * ray.x);
+                let (r, t) = &motions[*labels.get(x, y) as usize];
+                let p2 = r * (ray * z) + t;
+                let [u, v] = k.project([p2.x, p2.y, p2.z]);
+                *depth1.get_mut(x, y) = z as f32;
+                *flow.get_mut(x, y) = [(u - x as f64) as f32, (v - y as f64) as f32];
+                *depth12.get_mut(x, y) = p2.z as f32;
+            }
+        }
+        (labels, depth1, flow, depth12)
+    }
+
+    #[test]
+    fn true_states_recover_each_piece_s_motion_and_plane() {
+        let k = Intrinsics {
+            fx: 20.0,
+            fy: 20.0,
+            cx: 11.5,
+            cy: 7.5,
+        };
+        let turn = |a: f64| *nalgebra::Rotation3::new(Vector3::new(0.0, a, 0.01)).matrix();
+        let motions = [
+            (turn(0.02), Vector3::new(0.3, 0.0, 0.1)),
+            (turn(-0.05), Vector3::new(-0.1, 0.2, -0.4)),
+        ];
+        let (labels, depth1, flow, depth12) = two_motion_scene(&k, &motions);
+        let placeholder = Piece {
+            r: Matrix3::identity(),
+            t_hat: Vector3::z(),
+            m: Vector3::new(0.0, 0.0, 1.0),
+            lambda: 1.0,
+            hypothesis: 7,
+            degenerate: None,
+        };
+        let soup = Soup {
+            pieces: vec![placeholder; 3],
+            hypotheses: Vec::new(),
+            noise_px: 0.0,
+        };
+        let states = true_states(&soup, &labels, &depth1, &flow, &depth12, &k);
+        for (piece, (r, t)) in states.pieces.iter().zip(&motions) {
+            assert!((piece.r - r).norm() < 1e-5, "{:?} against {r:?}", piece.r);
+            assert!((piece.t_hat * piece.lambda - t).norm() < 1e-5);
+            // The plane z = 4 + 0.3 x is (−0.075, 0, 0.25)ᵀX = 1 at the truth's scale.
+            let metric_m = piece.m / piece.lambda;
+            assert!((metric_m - Vector3::new(-0.075, 0.0, 0.25)).norm() < 1e-6);
+            assert_eq!(piece.hypothesis, 7, "the piece's bookkeeping is kept");
+        }
+        assert_eq!(
+            states.pieces[2], placeholder,
+            "a piece without pixels keeps its state"
+        );
+        assert!(rigid_state(&[(Vector3::z(), Vector3::z()); 7]).is_none());
     }
 }

@@ -22,6 +22,7 @@ fn the_committed_sample_is_what_the_generator_renders() {
             intrinsics: Some(scene.intrinsics),
             depth1: None,
             flow12: None,
+            depth12: None,
             moving1: None,
             groups1: None,
         },

@@ -86,11 +86,11 @@ fn flow_warps_frame2_onto_frame1_on_visible_pixels() {
 }
 
 #[test]
-fn depth_and_camera_motion_reproduce_the_static_flow() {
+fn depth_and_camera_motion_reproduce_the_static_flow_and_depth_in_camera_2() {
     for kind in SceneKind::ALL {
         let s = scene(kind);
         let k = s.intrinsics;
-        let mut worst = 0.0f64;
+        let (mut worst, mut worst_z) = (0.0f64, 0.0f64);
         for y in 0..H {
             for x in 0..W {
                 if *s.moving1.get(x, y) {
@@ -102,11 +102,17 @@ fn depth_and_camera_motion_reproduce_the_static_flow() {
                 let [u2, v2] = k.project(p2);
                 let [fu, fv] = *s.flow12.get(x, y);
                 worst = worst.max((u2 - x as f64 - fu as f64).hypot(v2 - y as f64 - fv as f64));
+                worst_z = worst_z.max((*s.depth12.get(x, y) as f64 / p2[2] - 1.0).abs());
             }
         }
         assert!(
             worst < 2e-3,
             "{}: static flow off by {worst} px",
+            kind.name()
+        );
+        assert!(
+            worst_z < 1e-5,
+            "{}: static depth in camera 2 off by {worst_z} (relative)",
             kind.name()
         );
     }

@@ -2,8 +2,10 @@
 //! and `soup synth` writes it): a folder holding
 //! `frame1.png`, `frame2.png`, optional `intrinsics.txt` (`fx fy cx cy`), `depth1.pfm`
 //! (z-depth of frame 1, NaN = unknown; or `depth1.dpt`, MPI Sintel's format) and `flow12.flo`. Our synthetic scenes add
-//! `moving1.png` (255 where the surface moves in the world) and `groups1.png` (motion group per
-//! pixel: 0 = static world, 1.. = each independent motion).
+//! `depth12.pfm` (z-depth in camera 2 of frame 1's surface point at each frame-1 pixel: with
+//! `depth1` and `flow12` the scene flow), `moving1.png` (255 where the surface moves in the
+//! world) and `groups1.png` (motion group per pixel: 0 = static world, 1.. = each independent
+//! motion).
 
 use std::path::{Path, PathBuf};
 
@@ -25,6 +27,9 @@ pub struct Case {
     pub intrinsics: Option<Intrinsics>,
     pub depth1: Option<Grid<f32>>,
     pub flow12: Option<FlowField>,
+    /// z-depth in camera 2 of frame 1's surface point at each frame-1 pixel (synthetic scenes:
+    /// with `depth1` and `flow12`, the exact scene flow).
+    pub depth12: Option<Grid<f32>>,
     pub moving1: Option<Grid<bool>>,
     pub groups1: Option<Grid<u8>>,
 }
@@ -49,6 +54,7 @@ pub fn read_case(dir: &Path) -> Result<Case> {
         None => optional(dir, "depth1.dpt", dpt::decode)?,
     };
     let flow12 = optional(dir, "flow12.flo", flo::decode)?;
+    let depth12 = optional(dir, "depth12.pfm", pfm::decode)?;
     let moving1 = optional(dir, "moving1.png", |b| {
         Ok(png16::decode(b)?.0.map(|&v| v > 0))
     })?;
@@ -58,6 +64,7 @@ pub fn read_case(dir: &Path) -> Result<Case> {
     let sizes = [
         depth1.as_ref().map(Grid::size),
         flow12.as_ref().map(Grid::size),
+        depth12.as_ref().map(Grid::size),
         moving1.as_ref().map(Grid::size),
         groups1.as_ref().map(Grid::size),
     ];
@@ -79,6 +86,7 @@ pub fn read_case(dir: &Path) -> Result<Case> {
         intrinsics,
         depth1,
         flow12,
+        depth12,
         moving1,
         groups1,
     })
@@ -100,6 +108,9 @@ pub fn write_case(dir: &Path, case: &Case) -> Result<()> {
     }
     if let Some(flow) = &case.flow12 {
         write_file(&dir.join("flow12.flo"), &flo::encode(flow))?;
+    }
+    if let Some(depth) = &case.depth12 {
+        write_file(&dir.join("depth12.pfm"), &pfm::encode(depth))?;
     }
     if let Some(moving) = &case.moving1 {
         let mask = moving.map(|&m| if m { 255u16 } else { 0 });
@@ -175,6 +186,7 @@ mod tests {
             }),
             depth1: Some(Grid::from_fn(40, 33, |x, _| 1.0 + x as f32)),
             flow12: Some(Grid::filled(40, 33, [0.5, -1.0])),
+            depth12: Some(Grid::from_fn(40, 33, |_, y| 2.0 + y as f32)),
             moving1: Some(Grid::from_fn(40, 33, |x, _| x > 20)),
             groups1: Some(Grid::from_fn(40, 33, |x, _| (x > 20) as u8 * 3)),
         }
@@ -190,6 +202,7 @@ mod tests {
         assert_eq!(back.intrinsics, case.intrinsics);
         assert_eq!(back.depth1, case.depth1);
         assert_eq!(back.flow12, case.flow12);
+        assert_eq!(back.depth12, case.depth12);
         assert_eq!(back.moving1, case.moving1);
         assert_eq!(back.groups1, case.groups1);
         std::fs::remove_dir_all(&dir).unwrap();

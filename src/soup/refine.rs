@@ -339,6 +339,33 @@ impl Problem {
             .sum();
         unary + pairwise
     }
+
+    /// The terms of E at the soup's current states (their sum is [`Problem::energy`] up to
+    /// rounding).
+    pub fn energy_terms(&self, soup: &Soup) -> EnergyTerms {
+        let ground_scale = self.ground.as_ref().map_or(1.0, |g| g.scale(soup));
+        let pieces = soup.pieces.iter().enumerate();
+        EnergyTerms {
+            proj: pieces.clone().map(|(i, p)| self.unary(i, p)).sum(),
+            contacts: (self.contacts.iter())
+                .map(|c| self.contact_table(c, &[soup.pieces[c.a]], &[soup.pieces[c.b]])[0])
+                .sum(),
+            ground: pieces
+                .map(|(i, p)| self.ground_cost(i, p, ground_scale))
+                .sum(),
+        }
+    }
+}
+
+/// The refinement's energy E term by term.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct EnergyTerms {
+    /// w_proj Σ_i E_proj(θ_i).
+    pub proj: f64,
+    /// Σ E_cont over touching pairs (both frames).
+    pub contacts: f64,
+    /// Σ_i E_ground(θ_i).
+    pub ground: f64,
 }
 
 /// Refines `soup` in place and reports the energies.

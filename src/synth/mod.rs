@@ -108,6 +108,10 @@ pub struct SynthScene {
     pub depth1: Grid<f32>,
     /// Exact flow 1→2 of every pixel with a depth, occluded ones included.
     pub flow12: FlowField,
+    /// Exact z-depth in camera 2 of frame 1's surface point at each frame-1 pixel (camera-2
+    /// frame; occluded points included); NaN where no surface. With `depth1` and `flow12` it
+    /// gives every pixel's 3D point at both times: the scene flow.
+    pub depth12: Grid<f32>,
     /// True where the surface moves in the world (rigid mover or deforming sheet).
     pub moving1: Grid<bool>,
     /// Motion group: 0 = static world, 1.. = each independent mover or sheet.
@@ -146,6 +150,7 @@ pub fn render(kind: SceneKind, width: usize, height: usize) -> Result<SynthScene
     let frame2 = render_colour(objects, &cam2, 1, width, height);
     let mut depth1 = Grid::filled(width, height, f32::NAN);
     let mut flow12 = Grid::filled(width, height, [f32::NAN; 2]);
+    let mut depth12 = Grid::filled(width, height, f32::NAN);
     let mut moving1 = Grid::filled(width, height, false);
     let mut group1 = Grid::filled(width, height, 0u8);
     let mut visible2 = Grid::filled(width, height, false);
@@ -159,6 +164,7 @@ pub fn render(kind: SceneKind, width: usize, height: usize) -> Result<SynthScene
             let [u2, v2] = intrinsics.project([p2.x, p2.y, p2.z]);
             *depth1.get_mut(x, y) = hit.lambda as f32;
             *flow12.get_mut(x, y) = [(u2 - x as f64) as f32, (v2 - y as f64) as f32];
+            *depth12.get_mut(x, y) = p2.z as f32;
             *moving1.get_mut(x, y) = object.group != 0;
             *group1.get_mut(x, y) = object.group;
             *visible2.get_mut(x, y) =
@@ -172,6 +178,7 @@ pub fn render(kind: SceneKind, width: usize, height: usize) -> Result<SynthScene
         frame2,
         depth1,
         flow12,
+        depth12,
         moving1,
         group1,
         visible2,

@@ -6,7 +6,7 @@ use std::time::Instant;
 use serde::Serialize;
 use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::camera::resolve_intrinsics;
-use superpixel_soup::eval::{DepthMetrics, depth_metrics, median};
+use superpixel_soup::eval::{DepthMetrics, depth_metrics, median, true_states};
 use superpixel_soup::flow::FlowParams;
 use superpixel_soup::formats::case::{Case, read_case};
 use superpixel_soup::formats::write_file;
@@ -356,24 +356,40 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
             mre_of(&at(s))?
         );
     }
-    // The refinement energy over full states.
+    // The refinement energy over full states: the "truth" keeps the soup's motions and planes
+    // at the oracle scales; the true states (where the case has the scene flow) are each
+    // piece's own rigid motion and plane from the ground truth.
     if params.refine.iterations > 0 {
         let refine_problem = refine::Problem::new(scaled, &inputs, &params.scales, &params.refine);
-        let mut truth = at(&oracle);
-        let truth_energy = refine_problem.energy(&truth);
-        let truth_mre = mre_of(&truth)?;
-        refine::refine(&mut truth, &refine_problem);
-        println!(
-            "| refine | solution | {:.3} | | {:.4} |",
-            refine_problem.energy(&rec.soup),
-            mre_of(&rec.soup)?
-        );
-        println!("| refine | truth | {truth_energy:.3} | | {truth_mre:.4} |");
-        println!(
-            "| refine | truth refined | {:.3} | | {:.4} |",
-            refine_problem.energy(&truth),
-            mre_of(&truth)?
-        );
+        let mut rows = vec![("solution", rec.soup.clone(), false)];
+        rows.push(("truth", at(&oracle), true));
+        if let (Some(flow), Some(depth12)) = (&case.flow12, &case.depth12) {
+            let labels = &rec.superpixels.labels;
+            let states = true_states(&rec.soup, labels, gt, flow, depth12, &k_in);
+            rows.push(("true states", states, true));
+        }
+        println!();
+        println!("| energy | state | E | refinement: w_proj E_proj + E_cont + E_ground | MRE |");
+        println!("| --- | --- | --- | --- | --- |");
+        for (name, mut soup, refined) in rows {
+            for suffix in [Some(""), refined.then_some(" refined")]
+                .into_iter()
+                .flatten()
+            {
+                if !suffix.is_empty() {
+                    refine::refine(&mut soup, &refine_problem);
+                }
+                let terms = refine_problem.energy_terms(&soup);
+                println!(
+                    "| refine | {name}{suffix} | {:.3} | {:.3} + {:.3} + {:.3} | {:.4} |",
+                    refine_problem.energy(&soup),
+                    terms.proj,
+                    terms.contacts,
+                    terms.ground,
+                    mre_of(&soup)?
+                );
+            }
+        }
     }
     // Pieces carrying most of the error: solved depth / true depth after the global alignment,
     // from the final soup's own depths (the refinement moves planes too, so its λ alone does

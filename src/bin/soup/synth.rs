@@ -46,6 +46,7 @@ pub fn run(args: Args) -> Result<()> {
             intrinsics: Some(scene.intrinsics),
             depth1: Some(depth1.clone()),
             flow12: Some(scene.flow12),
+            depth12: Some(scene.depth12),
             moving1: Some(scene.moving1),
             groups1: Some(scene.group1),
         };
