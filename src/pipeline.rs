@@ -226,7 +226,7 @@ pub fn reconstruct(
     }
     match flow {
         FlowInput::Given(given) => {
-            reconstruct_from(pair, FlowInput::Given(given), params, progress)
+            reconstruct_from(pair, FlowInput::Given(given), params, None, progress)
         }
         FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, params, progress),
     }
@@ -267,7 +267,9 @@ fn reconstruct_until_pinned(
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
-    let first_pass = reconstruct_from(pair, FlowInput::Compute(first), params, progress)?;
+    let first_pass = reconstruct_from(pair, FlowInput::Compute(first), params, None, progress)?;
+    // Frame 1's superpixels do not depend on the flow: later passes share the first one's.
+    let mut shared: Option<Segmentation> = None;
     let mut best = Pass::of(&first_pass, first);
     let mut last = best;
     let mut notes = first_pass.report.notes.clone();
@@ -281,9 +283,18 @@ fn reconstruct_until_pinned(
             preset_name(&last.used),
             preset_name(&finer),
         ));
+        if shared.is_none() {
+            shared = held.as_ref().map(Segmentation::of);
+        }
         // One finished pass at a time: the best one so far is made again if it stays the best.
         held = None;
-        match reconstruct_from(pair, FlowInput::Compute(finer), params, progress) {
+        match reconstruct_from(
+            pair,
+            FlowInput::Compute(finer),
+            params,
+            shared.as_ref(),
+            progress,
+        ) {
             Ok(again) => {
                 notes.extend_from_slice(&again.report.notes[pair.notes.len()..]);
                 spent.extend_from_slice(&again.report.timings_ms);
@@ -312,7 +323,13 @@ fn reconstruct_until_pinned(
                 100.0 * last.pinned,
                 preset_name(&last.used),
             ));
-            let again = reconstruct_from(pair, FlowInput::Compute(best.asked), params, progress)?;
+            let again = reconstruct_from(
+                pair,
+                FlowInput::Compute(best.asked),
+                params,
+                shared.as_ref(),
+                progress,
+            )?;
             spent.extend_from_slice(&again.report.timings_ms);
             again
         }
@@ -351,12 +368,47 @@ fn summed_by_stage(laps: &[(Stage, f64)]) -> Vec<(Stage, f64)> {
         .collect()
 }
 
-/// One pass of the pipeline: flow (given, or computed by [`trusted_flow`]), superpixels,
+/// Frame 1's superpixels and their graphs: they depend on frame 1 and the parameters only, so
+/// the passes of [`reconstruct_until_pinned`] share them.
+#[derive(Clone)]
+struct Segmentation {
+    superpixels: Superpixels,
+    boundaries: BoundaryGraph,
+    knn: KnnGraph,
+}
+
+impl Segmentation {
+    /// SLIC on `frame1`, the boundary graph and the K-NN graph, with `params`.
+    fn compute(frame1: &Frame, params: &Params) -> Result<Self> {
+        let superpixels = slic(frame1, &params.superpixels)?;
+        let boundaries = boundary_graph(&superpixels, frame1);
+        // The graph's distance weights are not used by the pipeline (only the neighbour lists).
+        let knn = knn_graph(&superpixels, params.k, 0.0);
+        Ok(Segmentation {
+            superpixels,
+            boundaries,
+            knn,
+        })
+    }
+
+    /// A copy of `rec`'s.
+    fn of(rec: &Reconstruction) -> Self {
+        Segmentation {
+            superpixels: rec.superpixels.clone(),
+            boundaries: rec.boundaries.clone(),
+            knn: rec.knn.clone(),
+        }
+    }
+}
+
+/// One pass of the pipeline: flow (given, or computed by [`trusted_flow`]), superpixels (or a
+/// copy of `segmentation`, made by an earlier pass with the same frame 1 and parameters),
 /// unit-scale soup, scales, refinement and outputs.
 fn reconstruct_from(
     pair: &FramePair,
     flow: FlowInput,
     params: &Params,
+    segmentation: Option<&Segmentation>,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
     let (w, h) = pair.frame1.size();
@@ -395,11 +447,15 @@ fn reconstruct_from(
     timings.push((Stage::Flow, clock.lap()));
 
     progress(Stage::Superpixels, 0.0);
-    let sp = slic(&pair.frame1, &params.superpixels)?;
-    let boundaries = boundary_graph(&sp, &pair.frame1);
+    let Segmentation {
+        superpixels: sp,
+        boundaries,
+        knn,
+    } = match segmentation {
+        Some(shared) => shared.clone(),
+        None => Segmentation::compute(&pair.frame1, params)?,
+    };
     let adjacency = boundaries.adjacency(sp.len());
-    // The graph's distance weights are not used by the pipeline (only the neighbour lists).
-    let knn = knn_graph(&sp, params.k, 0.0);
     timings.push((Stage::Superpixels, clock.lap()));
 
     progress(Stage::Motion, 0.0);
