@@ -1,0 +1,66 @@
+//! The same depth on every platform. The pipeline's discrete choices (RANSAC samples, motion
+//! assignment, scale search, particle labelling) amplify a difference in the last bit of any
+//! arithmetic: once, glibc's and wasm's `ln` disagreed and the page's crowd came out at MRE
+//! 1.281 while the command line gave 0.264. So every result's maths comes from the libm crate
+//! (clippy.toml), and this test pins it: one small dynamic scene, reconstructed with computed
+//! flow, must give the depth whose digest is [`EXPECTED_DIGEST`], natively (`cargo test`) and in
+//! the browser's wasm (`cargo test --target wasm32-unknown-unknown`, as ./check.sh runs it).
+//!
+//! When a change to the pipeline changes its results on purpose, both runs fail with the same
+//! new digest: put it in [`EXPECTED_DIGEST`]. When only one of them fails, the platforms
+//! disagree, and the change that made them is the bug.
+
+use superpixel_soup::image::{ExifInfo, LoadedImage};
+use superpixel_soup::input::prepare_pair;
+use superpixel_soup::synth::{SceneKind, render};
+use superpixel_soup::{FlowInput, Params, reconstruct};
+
+#[cfg(target_arch = "wasm32")]
+wasm_bindgen_test::wasm_bindgen_test_configure!(run_in_browser);
+
+/// FNV-1a (64 bits) of the working-resolution depth's f32 bits, every NaN as one value (NaN
+/// payloads may differ between platforms without any result differing).
+fn digest(depth: &[f32]) -> u64 {
+    depth
+        .iter()
+        .map(|z| if z.is_nan() { f32::NAN } else { *z }.to_bits())
+        .flat_map(u32::to_le_bytes)
+        .fold(0xcbf2_9ce4_8422_2325, |hash, byte| {
+            (hash ^ u64::from(byte)).wrapping_mul(0x0000_0100_0000_01b3)
+        })
+}
+
+/// The digest of the crowd at 320 × 136 with 300 superpixels and computed flow (the library's
+/// default preset), the rest at the defaults.
+const EXPECTED_DIGEST: u64 = 0xd7bd_c926_4561_dde4;
+
+fn crowd_depth_digest() -> u64 {
+    let scene = render(SceneKind::Crowd, 320, 136).unwrap();
+    let loaded = |frame| LoadedImage {
+        frame,
+        exif: ExifInfo::default(),
+    };
+    let pair = prepare_pair(
+        loaded(scene.frame1),
+        loaded(scene.frame2),
+        Some(scene.intrinsics),
+        1024,
+    )
+    .unwrap();
+    let mut params = Params::default();
+    params.superpixels.count = 300;
+    let flow = FlowInput::Compute(Default::default());
+    let rec = reconstruct(&pair, flow, &params, &mut |_, _| {}).unwrap();
+    digest(rec.depth.data())
+}
+
+#[cfg_attr(not(target_arch = "wasm32"), test)]
+#[cfg_attr(target_arch = "wasm32", wasm_bindgen_test::wasm_bindgen_test)]
+fn the_depth_is_the_same_bits_natively_and_in_wasm() {
+    let got = crowd_depth_digest();
+    assert_eq!(
+        got, EXPECTED_DIGEST,
+        "depth digest {got:#018x}: if the pipeline's results changed on purpose, this is the new \
+         EXPECTED_DIGEST (natively and in wasm alike); if only one platform fails, they disagree"
+    );
+}
