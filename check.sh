@@ -95,7 +95,8 @@ step "cargo doc (wasm32)" - \
 step "cargo test (native)" count_cargo cargo test
 step "wasm release build + wasm-bindgen" - scripts/build-web.sh
 # Every test target is built for wasm32 and run by wasm-bindgen-test-runner; only
-# #[wasm_bindgen_test] functions run there (browser suites: tests/web*.rs). Doc tests are native.
+# #[wasm_bindgen_test] functions run there (browser suites: tests/web*.rs, and tests/parity.rs,
+# which also runs natively and asks both for the same depth bits). Doc tests are native.
 step "wasm tests (headless Chromium)" count_cargo \
     env CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
     cargo test --target wasm32-unknown-unknown --tests

@@ -240,8 +240,13 @@ pub fn eval_case_dir(name: &str) -> Option<PathBuf> {
 /// camera 2 of frame 1's point) by least squares (Kabsch), and the least-squares plane through
 /// the first, at the truth's metric scale (λ = |t|). `k` is the intrinsics of the truth's
 /// resolution. A piece with fewer than 8 such pixels, or no translation, keeps its state in
-/// `soup`. The truth test's oracle: the refinement's energy at these states says whether the
-/// energy or the optimiser is at fault.
+/// `soup`, scaled by the median ratio of true to `soup` depth over the others (so that the
+/// contacts between kept and true pieces are judged at one global scale). The truth test's
+/// oracle: the refinement's energy at these states, against the solution's, separates the
+/// energy from the optimiser.
+///
+/// Errors: [`Error::SizeMismatch`] when the three truths differ in size,
+/// [`Error::InvalidParameter`] for empty `labels`.
 pub fn true_states(
     soup: &Soup,
     labels: &Grid<u32>,
@@ -249,7 +254,14 @@ pub fn true_states(
     flow12: &FlowField,
     depth12: &Grid<f32>,
     k: &Intrinsics,
-) -> Soup {
+) -> Result<Soup> {
+    depth1.check_same_size(flow12)?;
+    depth1.check_same_size(depth12)?;
+    if labels.data().is_empty() {
+        return Err(Error::InvalidParameter(
+            "true states need superpixel labels".into(),
+        ));
+    }
     let (w, h) = depth1.size();
     let mut points = vec![Vec::new(); soup.pieces.len()];
     for y in 0..h {
@@ -266,16 +278,30 @@ pub fn true_states(
         }
     }
     let mut out = soup.clone();
-    for (piece, pairs) in out.pieces.iter_mut().zip(&points) {
-        if let Some(state) = rigid_state(pairs) {
-            *piece = Piece {
-                degenerate: piece.degenerate,
-                hypothesis: piece.hypothesis,
-                ..state
-            };
+    let mut kept = Vec::new();
+    let mut ratios = Vec::new();
+    for (i, (piece, pairs)) in out.pieces.iter_mut().zip(&points).enumerate() {
+        let Some(state) = rigid_state(pairs) else {
+            kept.push(i);
+            continue;
+        };
+        // The true and the soup's depth along the ray through the piece's true centroid.
+        let centroid = pairs.iter().map(|p| p.0).sum::<Vector3<f64>>() / pairs.len() as f64;
+        let ratio = centroid.z / piece.depth(&(centroid / centroid.z));
+        if ratio.is_finite() && ratio > 0.0 {
+            ratios.push(ratio);
         }
+        *piece = Piece {
+            degenerate: piece.degenerate,
+            hypothesis: piece.hypothesis,
+            ..state
+        };
     }
-    out
+    if !ratios.is_empty() {
+        let scale = median(ratios);
+        kept.iter().for_each(|&i| out.pieces[i].lambda *= scale);
+    }
+    Ok(out)
 }
 
 /// The rigid motion X' = R X + t moving the first points of `pairs` onto the second (Kabsch:
@@ -452,7 +478,7 @@ mod tests {
             hypotheses: Vec::new(),
             noise_px: 0.0,
         };
-        let states = true_states(&soup, &labels, &depth1, &flow, &depth12, &k);
+        let states = true_states(&soup, &labels, &depth1, &flow, &depth12, &k).unwrap();
         for (piece, (r, t)) in states.pieces.iter().zip(&motions) {
             assert!((piece.r - r).norm() < 1e-5, "{:?} against {r:?}", piece.r);
             assert!((piece.t_hat * piece.lambda - t).norm() < 1e-5);
@@ -461,10 +487,39 @@ mod tests {
             assert!((metric_m - Vector3::new(-0.075, 0.0, 0.25)).norm() < 1e-6);
             assert_eq!(piece.hypothesis, 7, "the piece's bookkeeping is kept");
         }
+        // A piece without pixels keeps its state, at the truth's scale: the true depths of the
+        // plane's two halves lie in 3.4–4.9, the placeholder's at 1.
+        let kept = states.pieces[2];
         assert_eq!(
-            states.pieces[2], placeholder,
-            "a piece without pixels keeps its state"
+            (kept.r, kept.t_hat, kept.m),
+            (placeholder.r, placeholder.t_hat, placeholder.m)
         );
+        assert!(kept.lambda > 3.4 && kept.lambda < 4.9, "{}", kept.lambda);
         assert!(rigid_state(&[(Vector3::z(), Vector3::z()); 7]).is_none());
+        let small = Grid::filled(3, 3, 1.0f32);
+        assert!(true_states(&soup, &labels, &small, &flow, &depth12, &k).is_err());
+    }
+
+    #[test]
+    fn rigid_states_are_proper_rotations_on_planar_points() {
+        // Coplanar points leave the reflection through their plane as good a least-squares fit
+        // as the rotation: the fit must pick the rotation every time.
+        let mut rng = crate::rng::Rng::new(9);
+        for _ in 0..50 {
+            let axis = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * 0.3;
+            let r = *nalgebra::Rotation3::new(axis).matrix();
+            let t = Vector3::new(rng.normal(), rng.normal(), rng.normal());
+            let pairs: Vec<(Vector3<f64>, Vector3<f64>)> = (0..12)
+                .map(|_| {
+                    let (x, y) = (rng.normal(), rng.normal());
+                    let p = Vector3::new(x, y, 5.0 + 0.1 * x);
+                    (p, r * p + t)
+                })
+                .collect();
+            let state = rigid_state(&pairs).unwrap();
+            assert!((state.r.determinant() - 1.0).abs() < 1e-9);
+            assert!((state.r - r).norm() < 1e-9);
+            assert!((state.t_hat * state.lambda - t).norm() < 1e-9);
+        }
     }
 }

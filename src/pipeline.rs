@@ -259,8 +259,9 @@ impl Pass {
 /// earliest on a tie), with the notes of every pass in the order they ran and its stage times
 /// summed over all of them. Only one finished pass is held: an earlier pass that pins more than
 /// the later ones is made again at the end (the pipeline is deterministic), so the memory is
-/// that of one reconstruction and one running pass (the page's budget). A later pass that fails
-/// leaves the best one so far, with a note.
+/// that of one reconstruction and one running pass (the page's budget), plus a copy of frame 1's
+/// superpixels and graphs that the later passes share (they do not depend on the flow; a few
+/// bytes per pixel). A later pass that fails leaves the best one so far, with a note.
 fn reconstruct_until_pinned(
     pair: &FramePair,
     first: FlowParams,

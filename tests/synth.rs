@@ -5,6 +5,8 @@
 // Tests make no results: the platform's maths functions are fine here (clippy.toml).
 #![allow(clippy::disallowed_methods)]
 
+use nalgebra::Vector3;
+use superpixel_soup::eval::rigid_state;
 use superpixel_soup::grid::Grid;
 use superpixel_soup::synth::{SceneKind, SynthScene, render};
 
@@ -138,7 +140,46 @@ fn every_pixel_has_depth_and_flow() {
             "{}",
             kind.name()
         );
+        assert!(
+            s.depth12.data().iter().all(|z| z.is_finite() && *z > 0.1),
+            "{}: depth in camera 2",
+            kind.name()
+        );
     }
+}
+
+#[test]
+fn the_crowd_s_scene_flow_moves_each_walker_rigidly() {
+    // Every walker (and the static world) of the crowd is a rigid body: the 3D points of its
+    // pixels at time 1 (depth1) and at time 2 (flow12 and depth12) differ by one rigid motion.
+    let s = scene(SceneKind::Crowd);
+    let k = s.intrinsics;
+    let groups = 1 + *s.group1.data().iter().max().unwrap() as usize;
+    let mut pairs = vec![Vec::new(); groups];
+    for y in 0..H {
+        for x in 0..W {
+            let z1 = *s.depth1.get(x, y) as f64;
+            let [u, v] = *s.flow12.get(x, y);
+            let p1 = Vector3::from(k.ray(x as f64, y as f64)) * z1;
+            let ray2 = k.ray(x as f64 + u as f64, y as f64 + v as f64);
+            let p2 = Vector3::from(ray2) * *s.depth12.get(x, y) as f64;
+            pairs[*s.group1.get(x, y) as usize].push((p1, p2));
+        }
+    }
+    let mut fitted = 0;
+    for (group, pairs) in pairs.iter().enumerate().filter(|(_, p)| p.len() >= 50) {
+        let state = rigid_state(pairs).unwrap();
+        let t = state.t_hat * state.lambda;
+        let worst = (pairs.iter())
+            .map(|(p, q)| (state.r * p + t - q).norm() / p.z)
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-4,
+            "group {group}: off a rigid motion by {worst} of the depth"
+        );
+        fitted += 1;
+    }
+    assert!(fitted >= 10, "only {fitted} groups with 50 pixels");
 }
 
 #[test]

@@ -581,7 +581,7 @@ mod tests {
         let weights: Vec<f64> = (0..12).map(|_| rng.uniform() / 6.0).collect();
         let truncation = TruncatedGaps::new(0.1);
         let problem = Problem {
-            samples: Vec::new(),
+            samples: vec![Vec::new(); 2],
             extent_rays: Vec::new(),
             contacts: vec![Contact {
                 a: 0,
@@ -623,5 +623,15 @@ mod tests {
             }
         }
         assert!(inside > 50, "only {inside} ray pairs inside the truncation");
+        // The energy's terms add up to it.
+        let soup = Soup {
+            pieces: vec![a[0], b[0]],
+            hypotheses: Vec::new(),
+            noise_px: 0.0,
+        };
+        let terms = problem.energy_terms(&soup);
+        let sum = terms.proj + terms.contacts + terms.ground;
+        assert!(terms.contacts > 0.0);
+        assert!((sum - problem.energy(&soup)).abs() < 1e-12);
     }
 }

@@ -42,7 +42,9 @@ pub struct Args {
     groups: bool,
     /// Also run the truth test: the scale energy and MRE of the solution, of the oracle scales
     /// (each superpixel at median(z_gt / z) of its pixels) and of the oracle scales polished by
-    /// the solver's per-piece descent.
+    /// the solver's per-piece descent; the refinement's energy by term at the solution, the
+    /// oracle scales and, where the case has scene flow (depth12.pfm), every piece at its true
+    /// motion and plane, each also refined.
     #[arg(long)]
     oracle: bool,
 }
@@ -291,9 +293,11 @@ fn oracles(
 /// The truth test: the scale energy ([`scales::Problem`]) and the refinement energy
 /// ([`refine::Problem`]) with the MRE, at the solution and at the ground truth (each superpixel at
 /// its oracle scale median(z_gt / z̄) over its pixels), the truth then polished by the same
-/// optimisers. Truth that polishes to a higher energy than the solution's means the energy
-/// prefers a wrong answer; lower means the optimiser missed it. Also lists the pieces that
-/// carry most of the solution's error.
+/// optimisers; for the refinement each energy's terms, and with the case's scene flow
+/// (`depth12`) also every piece at its true rigid motion and plane ([`true_states`]), before and
+/// after the same refinement. Truth that polishes to a higher energy than the solution's means
+/// the energy prefers a wrong answer; lower means the optimiser missed it. Also lists the pieces
+/// that carry most of the solution's error.
 fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     let Some(gt) = case.depth1.as_ref() else {
         return Ok(());
@@ -365,7 +369,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
         rows.push(("truth", at(&oracle), true));
         if let (Some(flow), Some(depth12)) = (&case.flow12, &case.depth12) {
             let labels = &rec.superpixels.labels;
-            let states = true_states(&rec.soup, labels, gt, flow, depth12, &k_in);
+            let states = true_states(&rec.soup, labels, gt, flow, depth12, &k_in)?;
             rows.push(("true states", states, true));
         }
         println!();
