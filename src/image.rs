@@ -29,6 +29,16 @@ pub struct LoadedImage {
     pub exif: ExifInfo,
 }
 
+impl From<Frame> for LoadedImage {
+    /// Pixels without metadata (no EXIF): a synthetic scene's frame, an evaluation case's.
+    fn from(frame: Frame) -> Self {
+        LoadedImage {
+            frame,
+            exif: ExifInfo::default(),
+        }
+    }
+}
+
 /// Decodes PNG or JPEG bytes into an upright RGB frame and reads its EXIF.
 ///
 /// Errors: [`Error::Decode`] for anything that is not a complete PNG/JPEG (unknown format,

@@ -8,7 +8,7 @@ use superpixel_soup::export::{ExportFile, encode};
 use superpixel_soup::flow::FlowParams;
 use superpixel_soup::formats::ply::Encoding;
 use superpixel_soup::formats::{flo, pfm, ply, png16};
-use superpixel_soup::image::{ExifInfo, LoadedImage, decode_image};
+use superpixel_soup::image::decode_image;
 use superpixel_soup::input::prepare_pair;
 use superpixel_soup::pipeline::Stage;
 use superpixel_soup::synth::{SceneKind, render};
@@ -18,13 +18,9 @@ use superpixel_soup::{FlowInput, Params, reconstruct};
 fn every_file_decodes_at_its_resolution_with_the_reconstruction_values() {
     // 240×102 input reconstructed at a working size of 160×68.
     let scene = render(SceneKind::Street, 240, 102).unwrap();
-    let loaded = |frame| LoadedImage {
-        frame,
-        exif: ExifInfo::default(),
-    };
     let pair = prepare_pair(
-        loaded(scene.frame1),
-        loaded(scene.frame2),
+        scene.frame1.into(),
+        scene.frame2.into(),
         Some(scene.intrinsics),
         160,
     )

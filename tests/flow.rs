@@ -13,7 +13,7 @@ use superpixel_soup::flow::{FlowField, FlowPair, FlowParams, Preset, compute_flo
 use superpixel_soup::formats::case::read_case;
 use superpixel_soup::formats::flo;
 use superpixel_soup::grid::Grid;
-use superpixel_soup::image::{ExifInfo, Frame, LoadedImage};
+use superpixel_soup::image::Frame;
 use superpixel_soup::input::prepare_pair;
 use superpixel_soup::rng::Rng;
 use superpixel_soup::synth::{SceneKind, render};
@@ -337,19 +337,12 @@ fn middlebury_motorcycle_is_at_least_as_accurate_as_opencv_dis_medium() {
     assert!(epe < 3.98, "EPE {epe}");
 }
 
-fn loaded(frame: &Frame) -> LoadedImage {
-    LoadedImage {
-        frame: frame.clone(),
-        exif: ExifInfo::default(),
-    }
-}
-
 #[test]
 fn the_pipeline_computes_flow_and_trusts_only_consistent_vectors() {
     let scene = render(SceneKind::StaticRoom, 256, 110).unwrap();
     let pair = prepare_pair(
-        loaded(&scene.frame1),
-        loaded(&scene.frame2),
+        scene.frame1.clone().into(),
+        scene.frame2.clone().into(),
         Some(scene.intrinsics),
         1024,
     )
@@ -371,8 +364,8 @@ fn the_pipeline_computes_flow_and_trusts_only_consistent_vectors() {
     assert!(rec.report.reliable_flow > 0.7 && rec.report.reliable_flow < 1.0);
     // Identical frames: the computed flow is zero, so depth is unobservable.
     let still = prepare_pair(
-        loaded(&scene.frame1),
-        loaded(&scene.frame1),
+        scene.frame1.clone().into(),
+        scene.frame1.clone().into(),
         Some(scene.intrinsics),
         1024,
     )

@@ -12,7 +12,6 @@
 
 use superpixel_soup::eval::depth_metrics;
 use superpixel_soup::grid::Grid;
-use superpixel_soup::image::{ExifInfo, LoadedImage};
 use superpixel_soup::input::prepare_pair;
 use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::{FlowInput, Params, reconstruct};
@@ -42,13 +41,9 @@ const EXPECTED_DIGEST: u64 = 0xd7bd_c926_4561_dde4;
 fn crowd_depth_digest() -> u64 {
     let scene = render(SceneKind::Crowd, 320, 136).unwrap();
     let truth = scene.depth1.clone();
-    let loaded = |frame| LoadedImage {
-        frame,
-        exif: ExifInfo::default(),
-    };
     let pair = prepare_pair(
-        loaded(scene.frame1),
-        loaded(scene.frame2),
+        scene.frame1.into(),
+        scene.frame2.into(),
         Some(scene.intrinsics),
         1024,
     )

@@ -9,7 +9,7 @@ use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::eval::depth_metrics;
 use superpixel_soup::geometry::essential::Motion;
 use superpixel_soup::grid::Grid;
-use superpixel_soup::image::{ExifInfo, Frame, LoadedImage};
+use superpixel_soup::image::Frame;
 use superpixel_soup::input::prepare_pair;
 use superpixel_soup::soup::scales::{
     ScaleInputs, ScaleParams, ScaleReport, build_problem, rigid_segments, solve_scales,
@@ -203,11 +203,7 @@ fn the_static_world_is_one_segment_where_its_parallax_measures_depth() {
 }
 
 fn pair_of(a: &Frame, b: &Frame, k: Intrinsics) -> superpixel_soup::input::FramePair {
-    let l = |f: &Frame| LoadedImage {
-        frame: f.clone(),
-        exif: ExifInfo::default(),
-    };
-    prepare_pair(l(a), l(b), Some(k), 1024).unwrap()
+    prepare_pair(a.clone().into(), b.clone().into(), Some(k), 1024).unwrap()
 }
 
 /// The reconstruction of a synthetic scene's two frames with `flow` and `params`.

@@ -11,7 +11,6 @@ use superpixel_soup::flow::FlowParams;
 use superpixel_soup::formats::case::{Case, read_case};
 use superpixel_soup::formats::write_file;
 use superpixel_soup::grid::Grid;
-use superpixel_soup::image::{ExifInfo, LoadedImage};
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
 use superpixel_soup::output::{depth_at, nearest_label};
 use superpixel_soup::soup::scales::{self, ScaleInputs};
@@ -139,13 +138,9 @@ fn evaluate(
     };
     let (w, h) = case.frame1.size();
     let camera = resolve_intrinsics(case.intrinsics, None, w, h);
-    let loaded = |frame: &Grid<[u8; 3]>| LoadedImage {
-        frame: frame.clone(),
-        exif: ExifInfo::default(),
-    };
     let pair = prepare_pair(
-        loaded(&case.frame1),
-        loaded(&case.frame2),
+        case.frame1.clone().into(),
+        case.frame2.clone().into(),
         Some(camera.intrinsics),
         DEFAULT_MAX_SIDE,
     )?;
