@@ -425,6 +425,31 @@ fn a_params_file_sets_parameters_and_rejects_unknown_ones() {
     assert!(err.contains("unknown parameter refine.iteratons"), "{err}");
 }
 
+/// The truth test's tables (`soup eval --oracle`) of the synthetic `scene` at 512×218 with 600
+/// superpixels and exact flow, written under `dir`.
+fn truth_test_of(dir: &std::path::Path, scene: &str) -> String {
+    let case = synth_scene(dir, scene, "512x218");
+    let out = soup_ok(&[
+        "eval",
+        case.to_str().unwrap(),
+        "--gt-flow",
+        "--superpixels",
+        "600",
+        "--oracle",
+    ]);
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Column `column` (the `|`-separated field, 1 = the energy's name) of the truth test's row for
+/// `energy` ("scales" or "refine") and `state` in `text`.
+fn truth_test_value(text: &str, energy: &str, state: &str, column: usize) -> f64 {
+    let row = text
+        .lines()
+        .find(|l| l.starts_with(&format!("| {energy} | {state} |")))
+        .unwrap_or_else(|| panic!("no {energy} {state} row in:\n{text}"));
+    row.split('|').nth(column).unwrap().trim().parse().unwrap()
+}
+
 #[test]
 fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
     // `soup eval --oracle`: the scale energy at the scale solve's answer and at the ground truth
@@ -433,24 +458,9 @@ fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
     // static and a dynamic scene (the street's cars move on their own).
     let dir = temp_dir("truth-test");
     for scene in ["static-room", "street"] {
-        let case = synth_scene(&dir, scene, "512x218");
-        let out = soup_ok(&[
-            "eval",
-            case.to_str().unwrap(),
-            "--gt-flow",
-            "--superpixels",
-            "600",
-            "--oracle",
-        ]);
-        let text = String::from_utf8_lossy(&out.stdout);
-        let energy = |state: &str| -> f64 {
-            let row = text
-                .lines()
-                .find(|l| l.starts_with(&format!("| scales | {state} |")))
-                .unwrap_or_else(|| panic!("no {state} row in:\n{text}"));
-            row.split('|').nth(3).unwrap().trim().parse().unwrap()
-        };
-        let (solution, truth) = (energy("scale solve"), energy("truth polished"));
+        let text = truth_test_of(&dir, scene);
+        let solution = truth_test_value(&text, "scales", "scale solve", 3);
+        let truth = truth_test_value(&text, "scales", "truth polished", 3);
         assert!(
             truth < solution,
             "{scene}: polished truth {truth} not below the solution {solution}"
@@ -469,30 +479,15 @@ fn truth_test_the_refinement_energy_ranks_the_true_states_below_the_solution_on_
     // the optimiser does not reach it.
     let dir = temp_dir("true-states");
     for scene in ["crowd", "flag"] {
-        let case = synth_scene(&dir, scene, "512x218");
-        let out = soup_ok(&[
-            "eval",
-            case.to_str().unwrap(),
-            "--gt-flow",
-            "--superpixels",
-            "600",
-            "--oracle",
-        ]);
-        let text = String::from_utf8_lossy(&out.stdout);
-        let column = |state: &str, column: usize| -> f64 {
-            let row = text
-                .lines()
-                .find(|l| l.starts_with(&format!("| refine | {state} |")))
-                .unwrap_or_else(|| panic!("no {state} row in:\n{text}"));
-            row.split('|').nth(column).unwrap().trim().parse().unwrap()
-        };
-        let (solution, truth) = (column("solution", 3), column("true states refined", 3));
+        let text = truth_test_of(&dir, scene);
+        let solution = truth_test_value(&text, "refine", "solution", 3);
+        let truth = truth_test_value(&text, "refine", "true states refined", 3);
         assert!(
             truth < 0.85 * solution,
             "{scene}: true states refined {truth} not well below the solution {solution}"
         );
         // The true states are the truth: their depth is almost exact.
-        let mre = column("true states", 5);
+        let mre = truth_test_value(&text, "refine", "true states", 5);
         assert!(mre < 0.01, "{scene}: true states' MRE {mre}");
     }
 }

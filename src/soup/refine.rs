@@ -332,12 +332,14 @@ impl Problem {
             .enumerate()
             .map(|(i, p)| self.unary(i, p) + self.ground_cost(i, p, ground_scale))
             .sum();
-        let pairwise: f64 = self
-            .contacts
-            .iter()
+        unary + self.contact_energy(soup)
+    }
+
+    /// Σ E_cont over the touching pairs at the soup's current states.
+    fn contact_energy(&self, soup: &Soup) -> f64 {
+        (self.contacts.iter())
             .map(|c| self.contact_table(c, &[soup.pieces[c.a]], &[soup.pieces[c.b]])[0])
-            .sum();
-        unary + pairwise
+            .sum()
     }
 
     /// The terms of E at the soup's current states (their sum is [`Problem::energy`] up to
@@ -347,9 +349,7 @@ impl Problem {
         let pieces = soup.pieces.iter().enumerate();
         EnergyTerms {
             proj: pieces.clone().map(|(i, p)| self.unary(i, p)).sum(),
-            contacts: (self.contacts.iter())
-                .map(|c| self.contact_table(c, &[soup.pieces[c.a]], &[soup.pieces[c.b]])[0])
-                .sum(),
+            contacts: self.contact_energy(soup),
             ground: pieces
                 .map(|(i, p)| self.ground_cost(i, p, ground_scale))
                 .sum(),
