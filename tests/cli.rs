@@ -453,9 +453,12 @@ fn truth_test_value(text: &str, energy: &str, state: &str, column: usize) -> f64
 #[test]
 fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
     // `soup eval --oracle`: the scale energy at the scale solve's answer and at the ground truth
-    // (each superpixel at its oracle scale) polished by the per-piece descent. An energy that
-    // prefers wrong answers would rank the polished truth above the solution. Exact flow, a
-    // static and a dynamic scene (the street's cars move on their own).
+    // (each superpixel at its oracle scale) polished by the per-piece descent: the issue's check
+    // (the truth-polished energy below the solution's), on a static and a dynamic scene (the
+    // street's cars move on their own), exact flow. It does not show that the energy prefers
+    // the truth's basin: the same descent from the solution ends at or below the polished truth
+    // (at this size static-room 5.727 both, street 3.791 against 3.839; docs/RESULTS.md, "the
+    // fair truth test"), so the test also reads that row: the descent never raises the energy.
     let dir = temp_dir("truth-test");
     for scene in ["static-room", "street"] {
         let text = truth_test_of(&dir, scene);
@@ -464,6 +467,11 @@ fn truth_test_the_scale_energy_ranks_the_polished_truth_below_the_solution() {
         assert!(
             truth < solution,
             "{scene}: polished truth {truth} not below the solution {solution}"
+        );
+        let polished = truth_test_value(&text, "scales", "scale solve polished", 3);
+        assert!(
+            polished <= solution,
+            "{scene}: the descent raised the solution's energy {solution} to {polished}"
         );
     }
 }

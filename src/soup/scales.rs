@@ -1,7 +1,9 @@
 //! Relative scales, one per superpixel: the "3D jigsaw puzzle" of the paper (section 4), from
 //! contacts between touching pieces. (The paper's ARAP energy, eq. 1, scored wrong answers below
 //! the truth on every dynamic case measured, so it is not used; `soup eval --oracle` runs the same
-//! truth test on this energy, which passes it on some cases and not on others.)
+//! truth test on this energy. Compared fairly, with the solution and the truth polished by the
+//! same per-piece descent, it ranks the solution's basin at or below the truth's on every case
+//! measured: docs/ARCHITECTURE.md, Pitfalls.)
 //!
 //! Each piece i of the unit-scale soup is known up to its scale λ_i = e^(s_i): its depths, and
 //! the length of its translation, grow together, so its fit to the flow does not change. What
