@@ -292,8 +292,9 @@ fn oracles(
 /// (`depth12`) also every piece at its true rigid motion and plane ([`true_states`]), before and
 /// after the same refinement. Truth that polishes to a higher energy than the solution's means
 /// the energy prefers a wrong answer; lower means the optimiser missed it. For the scale energy
-/// the solution is also polished by the same descent, since polishing lowers any state's energy:
-/// the two polished rows compare the basins fairly. Also lists the pieces
+/// the solution is also polished by the same descent, since polishing never raises a state's
+/// energy and lowers it wherever a piece can move: the two polished rows compare the basins
+/// fairly. Also lists the pieces
 /// that carry most of the solution's error.
 fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     let Some(gt) = case.depth1.as_ref() else {
@@ -336,8 +337,9 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     let solution: Vec<f64> = scaled.pieces.iter().map(|p| ln(p.lambda)).collect();
     let mut polished = oracle.clone();
     scales::polish(&problem, &mut polished, 50);
-    // The same descent from the solution: polishing lowers any state's energy, so only the two
-    // polished states compare fairly (which basin does the energy prefer?).
+    // The same descent from the solution: polishing never raises a state's energy and lowers it
+    // wherever a piece can move, so only the two polished states compare fairly (which basin
+    // does the energy prefer?).
     let mut solution_polished = solution.clone();
     scales::polish(&problem, &mut solution_polished, 50);
     let as_segments = |descend| {
