@@ -1,10 +1,11 @@
 //! Timings of the soup stages (everything after flow and superpixels: motion hypotheses,
-//! assignment, planes, contact scales, refinement, outputs) at 1024×436 with exact flow, single thread.
-//! Run with `cargo bench --bench soup`.
+//! assignment, planes, contact scales, refinement, fusion of the members, outputs) at 1024×436
+//! with exact flow, single thread. Run with `cargo bench --bench soup`.
 
 mod common;
 
 use superpixel_soup::flow::is_known;
+use superpixel_soup::input::prepare_pair;
 use superpixel_soup::output::{dense_depth, point_clouds};
 use superpixel_soup::soup::init::{InitParams, unit_scale_soup};
 use superpixel_soup::soup::refine::{Problem, RefineParams, refine};
@@ -12,6 +13,7 @@ use superpixel_soup::soup::scales::{ScaleInputs, ScaleParams, solve_scales};
 use superpixel_soup::superpixels::graph::{boundary_graph, knn_graph};
 use superpixel_soup::superpixels::{SlicParams, slic};
 use superpixel_soup::synth::{SceneKind, render};
+use superpixel_soup::{FlowInput, Params, Stage, reconstruct};
 
 fn main() {
     common::print_header("Soup stages after flow and superpixels, native release, one core");
@@ -72,6 +74,32 @@ fn main() {
             &format!("depth + clouds ({})", kind.name()),
             "1024×436",
             &times,
+        );
+        // The fusion's members (superpixels, unit-scale soup, scales and the members'
+        // refinement at four other counts, then the fusion) as the pipeline times them.
+        let Ok(pair) = prepare_pair(
+            s.frame1.clone().into(),
+            s.frame2.clone().into(),
+            Some(k),
+            1024,
+        ) else {
+            return;
+        };
+        let fusion: Vec<f64> = (0..3)
+            .filter_map(|_| {
+                let flow = FlowInput::Given(s.flow12.clone());
+                let rec = reconstruct(&pair, flow, &Params::default(), &mut |_, _| {}).ok()?;
+                let timings = rec.report.timings_ms;
+                timings
+                    .iter()
+                    .find(|(st, _)| *st == Stage::Ensemble)
+                    .map(|t| t.1)
+            })
+            .collect();
+        common::print_row(
+            &format!("fusion, 4 members ({})", kind.name()),
+            "1024×436",
+            &fusion,
         );
     }
 }

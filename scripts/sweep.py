@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Robustness of the soup's defaults: every numeric parameter of the scale solve and the
-refinement is moved by -20 % and +20 % in turn (one at a time, integers rounded), and the MRE of
+"""Robustness of the soup's defaults: every numeric parameter of the scale solve, the
+refinement and the fusion (`ensemble`) is moved by -20 % and +20 % in turn (one at a time, integers rounded), and the MRE of
 each evaluation case is compared with the MRE at the defaults. Prints a Markdown table: per
 parameter, the largest change of any case's MRE and the case it happened on.
 
@@ -61,7 +61,7 @@ def main():
     print()
     print("| parameter | default | −20 % | +20 % | largest MRE change | on case |")
     print("| --- | --- | --- | --- | --- | --- |")
-    for group in ("scales", "refine"):
+    for group in ("scales", "refine", "ensemble"):
         for name, value in params[group].items():
             if name in SKIP or isinstance(value, bool) or not isinstance(value, (int, float)):
                 continue

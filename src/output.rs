@@ -22,9 +22,19 @@ pub struct PointCloud {
 /// Frame-1 z-depth at the working resolution: each pixel on its superpixel's plane; NaN where
 /// the plane puts it behind the camera.
 pub fn dense_depth(soup: &Soup, labels: &Grid<u32>, k: &Intrinsics) -> Grid<f32> {
-    Grid::from_fn(labels.width(), labels.height(), |x, y| {
-        let piece = &soup.pieces[*labels.get(x, y) as usize];
-        piece.depth(&Vector3::from(k.ray(x as f64, y as f64))) as f32
+    strided_depth(soup, labels, k, 1)
+}
+
+/// [`dense_depth`] at every `stride`-th pixel in x and y only: (x, y) of the result is pixel
+/// (stride·x, stride·y) of the working resolution (⌈w / stride⌉ × ⌈h / stride⌉; a stride of 0
+/// counts as 1).
+pub fn strided_depth(soup: &Soup, labels: &Grid<u32>, k: &Intrinsics, stride: usize) -> Grid<f32> {
+    let s = stride.max(1);
+    let (w, h) = (labels.width().div_ceil(s), labels.height().div_ceil(s));
+    Grid::from_fn(w, h, |x, y| {
+        let (u, v) = (x * s, y * s);
+        let piece = &soup.pieces[*labels.get(u, v) as usize];
+        piece.depth(&Vector3::from(k.ray(u as f64, v as f64))) as f32
     })
 }
 
@@ -197,6 +207,24 @@ mod tests {
         assert_eq!(c1.positions[2][2], 4.0);
         assert!((c2.positions[0][0] - c1.positions[0][0] - 1.0).abs() < 1e-6);
         assert_eq!(c2.positions[2], c1.positions[2]);
+    }
+
+    #[test]
+    fn strided_depth_is_the_dense_depth_at_every_stride_th_pixel() {
+        let (soup, labels) = soup_and_labels();
+        let k = Intrinsics::default_for(6, 2);
+        let dense = dense_depth(&soup, &labels, &k);
+        for stride in [2, 4] {
+            let strided = strided_depth(&soup, &labels, &k, stride);
+            assert_eq!(strided.size(), (6usize.div_ceil(stride), 1));
+            for x in 0..strided.width() {
+                let (a, b) = (*strided.get(x, 0), *dense.get(x * stride, 0));
+                assert!(
+                    a == b || (a.is_nan() && b.is_nan()),
+                    "stride {stride}, x {x}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -1,10 +1,11 @@
 //! The public reconstruction API: two frames in, depth and point clouds of both frames out,
 //! one plain function per stage (flow → superpixels and graphs → unit-scale soup → scales →
-//! outputs). The CLI and the web page both call [`reconstruct`].
+//! refinement → outputs, then the fusion with members from nearby superpixel counts). The CLI
+//! and the web page both call [`reconstruct`].
 
 use serde::Serialize;
 
-use crate::camera::Camera;
+use crate::camera::{Camera, Intrinsics};
 use crate::error::{Error, Result};
 use crate::flow::{
     FlowField, FlowPair, FlowParams, Preset, compute_flow, is_known, resize_flow, trusted_share,
@@ -12,8 +13,9 @@ use crate::flow::{
 use crate::grid::Grid;
 use crate::image::Frame;
 use crate::input::FramePair;
-use crate::output::{PointCloud, dense_depth, depth_at, point_clouds, scene_flow};
+use crate::output::{PointCloud, dense_depth, depth_at, point_clouds, scene_flow, strided_depth};
 use crate::soup::Soup;
+use crate::soup::ensemble::{EnsembleParams, EnsembleReport, SAMPLE_STRIDE, fuse_scales};
 use crate::soup::init::{InitParams, unit_scale_soup};
 use crate::soup::refine::{self, RefineParams, RefineReport};
 use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, scale_confidence, solve_scales};
@@ -30,17 +32,19 @@ pub enum Stage {
     Scales,
     Refine,
     Outputs,
+    Ensemble,
 }
 
 impl Stage {
     /// Every stage, in the order the pipeline runs them.
-    pub const ALL: [Stage; 6] = [
+    pub const ALL: [Stage; 7] = [
         Stage::Flow,
         Stage::Superpixels,
         Stage::Motion,
         Stage::Scales,
         Stage::Refine,
         Stage::Outputs,
+        Stage::Ensemble,
     ];
 
     /// Name shown to users.
@@ -51,6 +55,7 @@ impl Stage {
             Stage::Motion => "motion",
             Stage::Scales => "scales",
             Stage::Refine => "refine",
+            Stage::Ensemble => "ensemble",
             Stage::Outputs => "outputs",
         }
     }
@@ -69,6 +74,9 @@ pub struct Params {
     pub init: InitParams,
     pub scales: ScaleParams,
     pub refine: RefineParams,
+    /// Reconstructions from other superpixel counts fused into the kept one
+    /// ([`crate::soup::ensemble`]).
+    pub ensemble: EnsembleParams,
     /// A share in [0, 1]: when less than this share of the pixels passes the forward–backward
     /// check, the flow is computed again with the next finer preset (fast → medium → high) and
     /// the pass with the most trusted pixels is kept; 0 never computes it again, 1 always goes on
@@ -87,7 +95,8 @@ pub struct Params {
     /// of five superpixel counts (1300–1700; MRE up to 1.28 against 0.27 for constant depth)
     /// and 55–78 % with `high` (0.14–0.19), while every other case pinned 74–100 % with
     /// `medium`. 0.7: below every other case, and above the crowd's 61 % when
-    /// `scales.min_confidence` is 20 % lower (at 0.6 that brought the 1.28 back).
+    /// `scales.min_confidence` is 20 % lower (at 0.6 that brought the 1.28 back). The share is
+    /// that of each pass before fusion (which runs once, on the kept pass).
     pub min_pinned_share: f64,
 }
 
@@ -101,6 +110,7 @@ impl Default for Params {
             init: InitParams::default(),
             scales: ScaleParams::default(),
             refine: RefineParams::default(),
+            ensemble: EnsembleParams::default(),
         }
     }
 }
@@ -140,6 +150,8 @@ pub struct Report {
     pub scales: ScaleReport,
     /// The refinement's energy per iteration (`None` when turned off).
     pub refine: Option<RefineReport>,
+    /// The members fused into the soup (`None` when `ensemble.members` is 1 or less).
+    pub ensemble: Option<EnsembleReport>,
     /// Superpixels whose scale the contacts do not pin (confidence below
     /// `scales.min_confidence`): their depth relative to the rest is a guess.
     pub unconfident: usize,
@@ -165,7 +177,8 @@ pub struct Reconstruction {
     pub unit_soup: Soup,
     /// The soup right after the scale solve, before the refinement (median λ = 1).
     pub scaled_soup: Soup,
-    /// The soup with relative scales, refined (median λ = 1: the "organised" soup).
+    /// The soup with relative scales, refined and fused with the members' (median λ = 1: the
+    /// "organised" soup).
     pub soup: Soup,
     /// Frame-1 depth at the working resolution (NaN = unknown).
     pub depth: Grid<f32>,
@@ -208,6 +221,9 @@ impl Reconstruction {
 /// [`Params::min_pinned_share`] of the image is made again from the flow of the next finer
 /// preset, and the pass that pins most is kept (the stages report their progress again from
 /// the flow on; notes say what happened, and the stage times are summed over the passes).
+/// The kept pass is then fused with its members ([`Stage::Ensemble`], last: see
+/// [`crate::soup::ensemble`]), once, and its depth and confidence are made again from the fused
+/// soup.
 pub fn reconstruct(
     pair: &FramePair,
     flow: FlowInput,
@@ -224,12 +240,25 @@ pub fn reconstruct(
             )));
         }
     }
-    match flow {
+    let ensemble = &params.ensemble;
+    if ensemble.members > 1
+        && !(ensemble.count_step >= 0.0
+            && ensemble.count_step * (ensemble.members / 2) as f64 <= 0.5)
+    {
+        return Err(Error::InvalidParameter(format!(
+            "ensemble.count_step {} with {} members: the members' superpixel counts must stay \
+             within half and one and a half times the count (step ≥ 0, step × (members / 2) ≤ 0.5)",
+            ensemble.count_step, ensemble.members
+        )));
+    }
+    let mut rec = match flow {
         FlowInput::Given(given) => {
             reconstruct_from(pair, FlowInput::Given(given), params, None, progress)
         }
         FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, params, progress),
-    }
+    }?;
+    fuse(pair, &mut rec, params, progress);
+    Ok(rec)
 }
 
 /// One pass of [`reconstruct_from`] with computed flow, as [`reconstruct_until_pinned`] weighs it.
@@ -447,24 +476,32 @@ fn reconstruct_from(
     }
     timings.push((Stage::Flow, clock.lap()));
 
-    progress(Stage::Superpixels, 0.0);
-    let Segmentation {
-        superpixels: sp,
-        boundaries,
-        knn,
-    } = match segmentation {
-        Some(shared) => shared.clone(),
-        None => Segmentation::compute(&pair.frame1, params)?,
-    };
-    let adjacency = boundaries.adjacency(sp.len());
-    timings.push((Stage::Superpixels, clock.lap()));
+    let solved = solve_soup(
+        &pair.frame1,
+        &k,
+        &flow,
+        &reliable,
+        params,
+        segmentation,
+        &mut clock,
+        &mut timings,
+        progress,
+    )?;
+    let Solved {
+        segmentation:
+            Segmentation {
+                superpixels: sp,
+                boundaries,
+                knn,
+            },
+        unit_soup,
+        scaled_soup,
+        soup,
+        scales,
+        refine,
+    } = solved;
 
-    progress(Stage::Motion, 0.0);
-    let unit_soup = unit_scale_soup(&sp, &knn, &adjacency, &flow, &reliable, &k, &params.init)?;
-    timings.push((Stage::Motion, clock.lap()));
-
-    progress(Stage::Scales, 0.0);
-    let mut soup = unit_soup.clone();
+    progress(Stage::Outputs, 0.0);
     let inputs = ScaleInputs {
         superpixels: &sp,
         boundaries: &boundaries,
@@ -472,24 +509,7 @@ fn reconstruct_from(
         reliable: &reliable,
         intrinsics: &k,
     };
-    let scales = solve_scales(&mut soup, &inputs, &params.scales);
-    let scaled_soup = soup.clone();
-    timings.push((Stage::Scales, clock.lap()));
-
-    progress(Stage::Refine, 0.0);
-    let refine = (params.refine.iterations > 0).then(|| {
-        let problem = refine::Problem::new(&soup, &inputs, &params.scales, &params.refine);
-        refine::refine(&mut soup, &problem)
-    });
-    timings.push((Stage::Refine, clock.lap()));
-
-    progress(Stage::Outputs, 0.0);
-    let confidence = scale_confidence(&soup, &inputs, &params.scales);
-    let depth = dense_depth(&soup, &sp.labels, &k);
-    let (iw, ih) = pair.input_size;
-    let (sx, sy) = pair.scale();
-    let k_input = k.scaled(1.0 / sx, 1.0 / sy);
-    let depth_input = depth_at(&soup, &sp.labels, iw, ih, &k_input);
+    let (confidence, depth, depth_input) = outputs(pair, &soup, &inputs, params);
     timings.push((Stage::Outputs, clock.lap()));
     progress(Stage::Outputs, 1.0);
 
@@ -510,10 +530,8 @@ fn reconstruct_from(
         hypotheses: soup.hypotheses.len(),
         scales,
         refine,
-        unconfident: confidence
-            .iter()
-            .filter(|&&c| c < params.scales.min_confidence)
-            .count(),
+        ensemble: None,
+        unconfident: unconfident(&confidence, params),
         confidence,
         notes,
     };
@@ -530,6 +548,212 @@ fn reconstruct_from(
         depth_input,
         frame1: pair.frame1.clone(),
         report,
+    })
+}
+
+/// What the outputs stage derives from a soup: each superpixel's scale confidence, the frame-1
+/// depth at the working resolution and at the input resolution of `pair`.
+fn outputs(
+    pair: &FramePair,
+    soup: &Soup,
+    inputs: &ScaleInputs,
+    params: &Params,
+) -> (Vec<f64>, Grid<f32>, Grid<f32>) {
+    let (k, labels) = (inputs.intrinsics, &inputs.superpixels.labels);
+    let confidence = scale_confidence(soup, inputs, &params.scales);
+    let depth = dense_depth(soup, labels, k);
+    let (iw, ih) = pair.input_size;
+    let (sx, sy) = pair.scale();
+    let depth_input = depth_at(soup, labels, iw, ih, &k.scaled(1.0 / sx, 1.0 / sy));
+    (confidence, depth, depth_input)
+}
+
+/// How many of `confidence` are below `params.scales.min_confidence`.
+fn unconfident(confidence: &[f64], params: &Params) -> usize {
+    let min = params.scales.min_confidence;
+    confidence.iter().filter(|&&c| c < min).count()
+}
+
+/// The fusion stage: [`fuse_members`] into `rec`'s soup, then its depth, confidence and report
+/// made again from the fused soup. Reported to `progress` (and timed) as [`Stage::Ensemble`]
+/// even when `params.ensemble.members` is 1 and nothing is fused.
+fn fuse(
+    pair: &FramePair,
+    rec: &mut Reconstruction,
+    params: &Params,
+    progress: &mut dyn FnMut(Stage, f32),
+) {
+    let mut clock = Clock::start();
+    progress(Stage::Ensemble, 0.0);
+    let k = rec.report.camera.intrinsics;
+    let ensemble = fuse_members(
+        &rec.frame1,
+        &k,
+        (&rec.flow, &rec.reliable),
+        params,
+        &rec.superpixels.labels,
+        &mut rec.soup,
+        &mut |f| progress(Stage::Ensemble, f),
+    );
+    if ensemble.is_some() {
+        let inputs = ScaleInputs {
+            superpixels: &rec.superpixels,
+            boundaries: &rec.boundaries,
+            flow: &rec.flow,
+            reliable: &rec.reliable,
+            intrinsics: &k,
+        };
+        let (confidence, depth, depth_input) = outputs(pair, &rec.soup, &inputs, params);
+        (rec.depth, rec.depth_input) = (depth, depth_input);
+        rec.report.unconfident = unconfident(&confidence, params);
+        rec.report.confidence = confidence;
+    }
+    rec.report.ensemble = ensemble;
+    rec.report.timings_ms.push((Stage::Ensemble, clock.lap()));
+    progress(Stage::Ensemble, 1.0);
+}
+
+/// What [`solve_soup`] makes: the segmentation and the soup after each of its stages.
+struct Solved {
+    segmentation: Segmentation,
+    /// Before the scale solve (λ = 1).
+    unit_soup: Soup,
+    /// After the scale solve.
+    scaled_soup: Soup,
+    /// After the refinement.
+    soup: Soup,
+    scales: ScaleReport,
+    refine: Option<RefineReport>,
+}
+
+/// The soup stages of one pass over a flow (working resolution, `reliable` marking the vectors
+/// to trust): superpixels of `frame1` (or a copy of `segmentation`), unit-scale soup, scales
+/// and refinement, with `params`. Each stage's milliseconds go onto `timings`.
+#[allow(clippy::too_many_arguments)]
+fn solve_soup(
+    frame1: &Frame,
+    k: &Intrinsics,
+    flow: &FlowField,
+    reliable: &Grid<bool>,
+    params: &Params,
+    segmentation: Option<&Segmentation>,
+    clock: &mut Clock,
+    timings: &mut Vec<(Stage, f64)>,
+    progress: &mut dyn FnMut(Stage, f32),
+) -> Result<Solved> {
+    progress(Stage::Superpixels, 0.0);
+    let segmentation = match segmentation {
+        Some(shared) => shared.clone(),
+        None => Segmentation::compute(frame1, params)?,
+    };
+    let sp = &segmentation.superpixels;
+    let adjacency = segmentation.boundaries.adjacency(sp.len());
+    timings.push((Stage::Superpixels, clock.lap()));
+
+    progress(Stage::Motion, 0.0);
+    let unit_soup = unit_scale_soup(
+        sp,
+        &segmentation.knn,
+        &adjacency,
+        flow,
+        reliable,
+        k,
+        &params.init,
+    )?;
+    timings.push((Stage::Motion, clock.lap()));
+
+    progress(Stage::Scales, 0.0);
+    let mut soup = unit_soup.clone();
+    let inputs = ScaleInputs {
+        superpixels: sp,
+        boundaries: &segmentation.boundaries,
+        flow,
+        reliable,
+        intrinsics: k,
+    };
+    let scales = solve_scales(&mut soup, &inputs, &params.scales);
+    let scaled_soup = soup.clone();
+    timings.push((Stage::Scales, clock.lap()));
+
+    progress(Stage::Refine, 0.0);
+    let refine = (params.refine.iterations > 0).then(|| {
+        let problem = refine::Problem::new(&soup, &inputs, &params.scales, &params.refine);
+        refine::refine(&mut soup, &problem)
+    });
+    timings.push((Stage::Refine, clock.lap()));
+    Ok(Solved {
+        segmentation,
+        unit_soup,
+        scaled_soup,
+        soup,
+        scales,
+        refine,
+    })
+}
+
+/// Fuses members into `soup` (frame-1 labels `labels`) when `params.ensemble.members` is more
+/// than 1 (see [`crate::soup::ensemble`]): each member is [`solve_soup`] over the same flow
+/// (`flow`: the field and its trusted mask) from one of
+/// [`EnsembleParams::member_counts`] superpixels, with the members' cheaper refinement; their
+/// depth maps (at every [`SAMPLE_STRIDE`]-th pixel) move each piece of `soup` to their median
+/// scale. A member that cannot be made is
+/// left out with a note in the report. `progress` gets the share of members done.
+fn fuse_members(
+    frame1: &Frame,
+    k: &Intrinsics,
+    (flow, reliable): (&FlowField, &Grid<bool>),
+    params: &Params,
+    labels: &Grid<u32>,
+    soup: &mut Soup,
+    progress: &mut dyn FnMut(f32),
+) -> Option<EnsembleReport> {
+    let ensemble = &params.ensemble;
+    if ensemble.members <= 1 {
+        return None;
+    }
+    let counts = ensemble.member_counts(params.superpixels.count);
+    let (mut depths, mut failed) = (Vec::new(), Vec::new());
+    for (i, &count) in counts.iter().enumerate() {
+        progress(i as f32 / counts.len() as f32);
+        let mut member = *params;
+        member.superpixels.count = count;
+        member.refine.iterations = ensemble.member_iterations;
+        member.refine.particles = ensemble.member_particles;
+        let mut clock = Clock::start();
+        let solved = solve_soup(
+            frame1,
+            k,
+            flow,
+            reliable,
+            &member,
+            None,
+            &mut clock,
+            &mut Vec::new(),
+            &mut |_, _| {},
+        );
+        let sampled = |m: Solved| {
+            strided_depth(
+                &m.soup,
+                &m.segmentation.superpixels.labels,
+                k,
+                SAMPLE_STRIDE,
+            )
+        };
+        match solved {
+            Ok(m) => depths.push(sampled(m)),
+            Err(e) => failed.push(format!("{count} superpixels: {e}")),
+        }
+    }
+    let own = strided_depth(soup, labels, k, SAMPLE_STRIDE);
+    let sampled_labels = Grid::from_fn(own.width(), own.height(), |x, y| {
+        *labels.get(x * SAMPLE_STRIDE, y * SAMPLE_STRIDE)
+    });
+    let rescaled = fuse_scales(soup, &sampled_labels, &own, &depths);
+    progress(1.0);
+    Some(EnsembleReport {
+        counts,
+        failed,
+        rescaled,
     })
 }
 

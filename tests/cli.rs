@@ -142,6 +142,13 @@ fn reconstruct_writes_the_documented_files() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(result.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["camera"]["source"], "user");
+    // Four members fused by default, from counts 1/15 and 2/15 either side of the 150 asked.
+    assert_eq!(
+        report["ensemble"]["counts"],
+        serde_json::json!([140, 160, 130, 170])
+    );
+    assert_eq!(report["ensemble"]["failed"], serde_json::json!([]));
+    assert!(report["ensemble"]["rescaled"].as_u64().unwrap() < 150);
     // Without a flow file the flow is computed; the report records its parameters. (Kept at the
     // preset asked for: at this size less than 75 % of the fast flow passes its check, which
     // would have it computed again with the next preset, and no second pass is asked for where
@@ -163,6 +170,8 @@ fn reconstruct_writes_the_documented_files() {
         "150",
         "--preset",
         "fast",
+        "--members",
+        "1",
         "--params",
         keep_preset.to_str().unwrap(),
         "--out",
@@ -171,6 +180,8 @@ fn reconstruct_writes_the_documented_files() {
     let report: serde_json::Value =
         serde_json::from_slice(&std::fs::read(computed.join("report.json")).unwrap()).unwrap();
     assert_eq!(report["flow"]["dis"]["finest_level"], 2);
+    // `--members 1` turns the fusion off.
+    assert_eq!(report["ensemble"], serde_json::Value::Null);
     assert_eq!(report["notes"], serde_json::json!([]));
     assert!(report["reliable_flow"].as_f64().unwrap() > 0.5);
     let flow =
@@ -360,6 +371,7 @@ fn help_shows_the_library_defaults() {
         ("--superpixels", params.superpixels.count.to_string()),
         ("--compactness", params.superpixels.compactness.to_string()),
         ("--k", params.k.to_string()),
+        ("--members", params.ensemble.members.to_string()),
     ] {
         let section = help
             .split(&format!("{option} <"))

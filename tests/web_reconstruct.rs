@@ -15,8 +15,8 @@ use superpixel_soup::input::DEFAULT_MAX_SIDE;
 use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::web::memory::failed_allocation;
 use superpixel_soup::web::reconstruct::{
-    FrameBuilder, PAGE_FLOW_PRESET, PageReconstruction, page_defaults, read_exif, reconstruct,
-    resolve_intrinsics_json,
+    FrameBuilder, PAGE_FLOW_PRESET, PageReconstruction, page_defaults, page_params, read_exif,
+    reconstruct, resolve_intrinsics_json,
 };
 use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
@@ -249,14 +249,19 @@ fn exif_intrinsics_and_defaults_as_json() {
 
     let defaults: serde_json::Value = serde_json::from_str(&page_defaults().unwrap()).unwrap();
     // The page's defaults are the library's, every parameter of them, but for the flow preset
-    // (medium in a browser tab, for memory).
+    // (medium in a browser tab, for memory) and the kept reconstruction's refinement (the fused
+    // members', for time).
     assert_eq!(defaults["options"]["maxSide"], DEFAULT_MAX_SIDE);
     assert_eq!(defaults["options"]["flowPreset"], PAGE_FLOW_PRESET.name());
     assert_eq!(PAGE_FLOW_PRESET, Preset::Medium);
     assert_eq!(
         defaults["options"]["params"],
-        serde_json::to_value(Params::default()).unwrap()
+        serde_json::to_value(page_params()).unwrap()
     );
+    let mut library = Params::default();
+    library.refine.iterations = library.ensemble.member_iterations;
+    library.refine.particles = library.ensemble.member_particles;
+    assert_eq!(page_params(), library);
     assert_eq!(
         defaults["stages"].as_array().unwrap().len(),
         superpixel_soup::Stage::ALL.len()

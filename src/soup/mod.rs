@@ -2,13 +2,15 @@
 //! a rigid motion, first at unit translation ([`init`]: the "unorganised" soup), then with a
 //! relative scale λ per superpixel solved from contacts between touching pieces ([`scales`]: the
 //! "organised" soup), then with planes, motions and scales refined together by particle belief
-//! propagation with TRW-S ([`refine`]).
+//! propagation with TRW-S ([`refine`]), and last with each piece moved to the median scale of
+//! several reconstructions from nearby superpixel counts ([`ensemble`]).
 //!
 //! Conventions (docs/ARCHITECTURE.md): camera 1 is the world frame (x right, y down, z forward).
 //! A piece's plane is mᵀX = 1, so a pixel with normalised ray x̄ = K⁻¹[u, v, 1]ᵀ has unit-scale
 //! depth z = 1 / (mᵀx̄). Its motion is X' = R X + λ t̂; scaling a piece by λ scales its depths by
 //! λ and its plane vector m by 1/λ, so the homography K (R + t̂ mᵀ) K⁻¹ is unchanged.
 
+pub mod ensemble;
 pub mod ground;
 pub mod init;
 pub mod plane;

@@ -54,7 +54,7 @@ test('the sample through the file input, drawn with WebGPU, with every download'
   assert.match(summary, /default guess/);
   // Every stage has a time, and the timings table adds them up.
   const stages = await page.$$eval('#stages li', (items) => items.map((li) => [li.dataset.stage, li.className, li.querySelector('.time').textContent]));
-  assert.deepEqual(stages.map((s) => s[0]), ['flow', 'superpixels', 'motion', 'scales', 'refine', 'outputs']);
+  assert.deepEqual(stages.map((s) => s[0]), ['flow', 'superpixels', 'motion', 'scales', 'refine', 'outputs', 'ensemble']);
   for (const [stage, state, time] of stages) {
     assert.equal(state, 'done', stage);
     assert.match(time, /^\d+ ms$/, stage);

@@ -17,6 +17,7 @@ export const NUMBER_FIELDS = [
   { name: 'sigma', path: ['params', 'scales', 'sigma'] },
   { name: 'refineIterations', path: ['params', 'refine', 'iterations'] },
   { name: 'particles', path: ['params', 'refine', 'particles'] },
+  { name: 'ensembleMembers', path: ['params', 'ensemble', 'members'] },
 ];
 
 const getPath = (object, path) => path.reduce((o, key) => o?.[key], object);

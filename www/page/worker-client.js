@@ -13,13 +13,16 @@ import { resetTruth, scorePending } from './groundtruth.js';
 import { saveSession } from './persist.js';
 
 /** Share of the progress bar per stage (roughly their share of the time on a 1024 × 436 pair). */
-const STAGE_WEIGHTS = { flow: 0.2, superpixels: 0.15, motion: 0.3, scales: 0.05, refine: 0.25, outputs: 0.05 };
+const STAGE_WEIGHTS = {
+  flow: 0.15, superpixels: 0.05, motion: 0.15, scales: 0.05, refine: 0.2, ensemble: 0.35, outputs: 0.05,
+};
 export const STAGE_LABELS = {
   flow: 'Optical flow',
   superpixels: 'Superpixels and graphs',
   motion: 'Motions and planes (unit-scale soup)',
   scales: 'Relative scales (contacts)',
   refine: 'Refinement (particle BP, TRW-S)',
+  ensemble: 'Fusion with other superpixel counts',
   outputs: 'Depth and point clouds',
 };
 

@@ -29,6 +29,11 @@ pub struct PipelineArgs {
     /// superpixel together with these).
     #[arg(long, default_value_t = Params::default().k)]
     pub k: usize,
+    /// Reconstructions fused into the result, from superpixel counts around `--superpixels`:
+    /// each superpixel's scale is their median (1 turns fusion off; each more costs about a
+    /// third of one reconstruction).
+    #[arg(long, default_value_t = Params::default().ensemble.members)]
+    pub members: usize,
     /// A JSON file setting any pipeline parameters (the shape of `params` in report.json; fields
     /// left out keep their defaults, nested objects are merged). An option above overrides the
     /// file when it differs from its default.
@@ -56,6 +61,9 @@ impl PipelineArgs {
         }
         if self.k != library.k {
             params.k = self.k;
+        }
+        if self.members != library.ensemble.members {
+            params.ensemble.members = self.members;
         }
         Ok(params)
     }

@@ -1,0 +1,294 @@
+//! Fusion of several reconstructions of one pair: each piece of the kept soup takes the scale
+//! that the median of the reconstructions gives it.
+//!
+//! Two frames leave many scales weakly pinned, and which wrong answer the scale solve and the
+//! refinement land on changes with small changes of their input: the same pair segmented into
+//! 1300, 1400, …, 1700 superpixels gives depth errors that swing by a factor of two (the flag
+//! 0.09–0.17, FlyingThings3D 0.20–0.42), each time with different pieces placed wrong. The
+//! placements that several segmentations agree on are the ones the data supports, so the
+//! pipeline ([`crate::pipeline`]) makes a few *members*, reconstructions of the same flow from
+//! other superpixel counts, and this module moves each piece of the kept soup to their median:
+//!
+//! 1. each member's depth map is brought to the soup's global scale (the median log-ratio over
+//!    the pixels both have: a reconstruction's global scale is arbitrary);
+//! 2. per pixel, the median log-depth over the soup and its members;
+//! 3. per piece, the median over its pixels of (that median − the piece's own log-depth) gives
+//!    its factor; λ is multiplied by it (depths scale by it, the homography stays: the piece
+//!    still explains its flow exactly as well), and the median λ is reset to 1.
+//!
+//! Only scales change: each piece keeps its own plane and motion, so depth, both point clouds,
+//! the scene flow and the confidence all come from one soup, as without members.
+
+use serde::Serialize;
+
+use super::Soup;
+use crate::grid::Grid;
+use crate::numeric::{exp, ln};
+
+/// Settings of the members fused into a reconstruction.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct EnsembleParams {
+    /// Reconstructions fused, the kept one included (1 turns fusion off; the counts must stay
+    /// within 0.5–1.5 × the kept one's: `count_step` × (members / 2) ≤ 0.5). 5: over 1300–1700
+    /// superpixels the mean depth error fell on all nine cases measured (the flag 0.127 →
+    /// 0.098, the creature 0.109 → 0.081, FlyingThings3D 0.318 → 0.298, the crowd 0.190 →
+    /// 0.163); 3 gave about half of that, and 9 (counts ±27 %) no more than 5.
+    pub members: usize,
+    /// Relative step between the members' superpixel counts: with 5 members and `count`
+    /// superpixels they have count × (1 − 2s), (1 − s), (1 + s), (1 + 2s). 1/15, so that 1500
+    /// gives 1300, 1400, 1600 and 1700: counts close enough that every member resolves the
+    /// same structures, far enough apart that their segmentations (and so their errors) differ.
+    pub count_step: f64,
+    /// MP-PBP iterations of each member's refinement (the kept reconstruction uses
+    /// `refine.iterations`). 2 with `member_particles` 8 costs a seventh of the full
+    /// refinement. Means over 1300–1700 superpixels of FlyingThings3D, the flag and the crowd,
+    /// fused: full members (6 iterations, 16 particles) 0.324, 0.100, 0.155; 3 iterations
+    /// 0.338, 0.101, 0.159; 2 iterations 0.338, 0.101, 0.159; no refinement 0.351, 0.104,
+    /// 0.165.
+    pub member_iterations: usize,
+    /// Particles per piece in each member's refinement (see `member_iterations`).
+    pub member_particles: usize,
+}
+
+impl Default for EnsembleParams {
+    fn default() -> Self {
+        EnsembleParams {
+            members: 5,
+            count_step: 1.0 / 15.0,
+            member_iterations: 2,
+            member_particles: 8,
+        }
+    }
+}
+
+impl EnsembleParams {
+    /// The superpixel counts of the members other than the kept reconstruction (made with
+    /// `count`): `count · (1 + j · count_step)` for j = −1, +1, −2, +2, … until there are
+    /// `members − 1`, rounded, at least 1.
+    pub fn member_counts(&self, count: usize) -> Vec<usize> {
+        (1..self.members)
+            .map(|i| {
+                let j = i.div_ceil(2) as f64 * if i % 2 == 1 { -1.0 } else { 1.0 };
+                ((count as f64 * (1.0 + j * self.count_step))
+                    .round()
+                    .max(1.0)) as usize
+            })
+            .collect()
+    }
+}
+
+/// The members' depth maps are kept at every `SAMPLE_STRIDE`-th pixel in x and y only: a piece
+/// of 1500 on a 1024 × 768 image has about 500 pixels, so each median still sees about 125,
+/// and four members' maps take 3 MB instead of 12 MB (the page's peak memory rose by 15 MiB
+/// with full maps).
+pub const SAMPLE_STRIDE: usize = 2;
+
+/// What the fusion did.
+#[derive(Clone, Debug, PartialEq, Serialize)]
+pub struct EnsembleReport {
+    /// Superpixel counts asked of the members (the kept reconstruction's not included; those
+    /// in `failed` were left out).
+    pub counts: Vec<usize>,
+    /// Notes on members that could not be made (their error), left out of the fusion.
+    pub failed: Vec<String>,
+    /// Pieces whose scale the fusion changed by more than 10 % relative to the soup's median.
+    pub rescaled: usize,
+}
+
+/// A relative change of a piece's scale that [`EnsembleReport::rescaled`] counts.
+const RESCALED_LOG: f64 = 0.0953; // ln 1.1
+
+/// Moves each piece of `soup` (its frame-1 labels `labels`, its dense depth `depth`, as
+/// [`crate::output::dense_depth`] makes it) to the scale that the per-pixel median of its
+/// depth and the `members`' depth maps (same size, any global scale, NaN or ≤ 0 = unknown)
+/// gives it, and resets the median λ to 1. A member sharing fewer than 100 known pixels
+/// with `depth` is left out; a piece without a known pixel keeps its scale. Returns how many
+/// pieces changed scale by more than 10 % (after the median reset).
+pub fn fuse_scales(
+    soup: &mut Soup,
+    labels: &Grid<u32>,
+    depth: &Grid<f32>,
+    members: &[Grid<f32>],
+) -> usize {
+    let own: Vec<f64> = depth.data().iter().map(|&z| log_depth(z)).collect();
+    let aligned: Vec<Vec<f64>> = members
+        .iter()
+        .filter(|m| m.size() == depth.size())
+        .filter_map(|m| aligned_log_depths(&own, m))
+        .collect();
+    let mut offsets = vec![Vec::new(); soup.pieces.len()];
+    let mut values = Vec::with_capacity(aligned.len() + 1);
+    for (i, (&label, &z)) in labels.data().iter().zip(&own).enumerate() {
+        if !z.is_finite() {
+            continue;
+        }
+        values.clear();
+        values.push(z);
+        values.extend(aligned.iter().map(|m| m[i]).filter(|v| v.is_finite()));
+        if let (Some(median), Some(list)) = (median(&mut values), offsets.get_mut(label as usize)) {
+            list.push(median - z);
+        }
+    }
+    let factors: Vec<f64> = offsets
+        .iter_mut()
+        .map(|o| median(o).unwrap_or(0.0))
+        .collect();
+    let mut logs: Vec<f64> = factors.clone();
+    let centre = median(&mut logs).unwrap_or(0.0);
+    let mut rescaled = 0;
+    for (piece, &f) in soup.pieces.iter_mut().zip(&factors) {
+        piece.lambda *= exp(f - centre);
+        rescaled += usize::from((f - centre).abs() > RESCALED_LOG);
+    }
+    rescaled
+}
+
+/// ln z, or NaN for a depth that is not finite and positive.
+fn log_depth(z: f32) -> f64 {
+    if z.is_finite() && z > 0.0 {
+        ln(z as f64)
+    } else {
+        f64::NAN
+    }
+}
+
+/// `member`'s log-depths shifted by the median of `own − member` over the pixels both know, so
+/// that its global scale is `own`'s; `None` when they share fewer than 100 such pixels.
+fn aligned_log_depths(own: &[f64], member: &Grid<f32>) -> Option<Vec<f64>> {
+    let logs: Vec<f64> = member.data().iter().map(|&z| log_depth(z)).collect();
+    let mut gaps: Vec<f64> = own
+        .iter()
+        .zip(&logs)
+        .map(|(a, b)| a - b)
+        .filter(|g| g.is_finite())
+        .collect();
+    if gaps.len() < 100 {
+        return None;
+    }
+    let shift = median(&mut gaps)?;
+    Some(logs.into_iter().map(|v| v + shift).collect())
+}
+
+/// The median of `values` (the mean of the two middle ones for an even count; reorders them),
+/// `None` when empty. Every value must be finite.
+fn median(values: &mut [f64]) -> Option<f64> {
+    let n = values.len();
+    if n == 0 {
+        return None;
+    }
+    values.sort_unstable_by(f64::total_cmp);
+    Some(if n % 2 == 1 {
+        values[n / 2]
+    } else {
+        0.5 * (values[n / 2 - 1] + values[n / 2])
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use nalgebra::{Matrix3, Vector3};
+
+    use super::*;
+    use crate::soup::Piece;
+
+    /// A soup of `n` fronto-parallel pieces at depth 1 (unit scale, λ = 1), and labels that give
+    /// piece i the columns 10 i .. 10 i + 9 of a 10n × 20 image.
+    fn strips(n: usize) -> (Soup, Grid<u32>) {
+        let piece = Piece {
+            r: Matrix3::identity(),
+            t_hat: Vector3::x(),
+            m: Vector3::z(),
+            lambda: 1.0,
+            hypothesis: 0,
+            degenerate: None,
+        };
+        let soup = Soup {
+            pieces: vec![piece; n],
+            hypotheses: Vec::new(),
+            noise_px: 0.1,
+        };
+        let labels = Grid::from_fn(10 * n, 20, |x, _| (x / 10) as u32);
+        (soup, labels)
+    }
+
+    /// Depth map of `labels` with piece i at `depths[i]`.
+    fn depth_map(labels: &Grid<u32>, depths: &[f32]) -> Grid<f32> {
+        labels.map(|&l| depths[l as usize])
+    }
+
+    #[test]
+    fn a_piece_moves_to_where_most_members_put_it() {
+        let (mut soup, labels) = strips(5);
+        let depth = depth_map(&labels, &[1.0; 5]);
+        // Three of four members put piece 2 twice as deep; every member has its own global scale.
+        let members = [
+            depth_map(&labels, &[3.0, 3.0, 6.0, 3.0, 3.0]),
+            depth_map(&labels, &[0.5, 0.5, 1.0, 0.5, 0.5]),
+            depth_map(&labels, &[2.0, 2.0, 4.0, 2.0, 2.0]),
+            depth_map(&labels, &[1.0, 1.0, 1.0, 1.0, 1.0]),
+        ];
+        let rescaled = fuse_scales(&mut soup, &labels, &depth, &members);
+        let lambdas: Vec<f64> = soup.pieces.iter().map(|p| p.lambda).collect();
+        for (i, l) in lambdas.iter().enumerate() {
+            let want = if i == 2 { 2.0 } else { 1.0 };
+            assert!((l - want).abs() < 1e-9, "piece {i}: λ {l}, want {want}");
+        }
+        assert_eq!(rescaled, 1);
+    }
+
+    #[test]
+    fn one_member_alone_moves_nothing() {
+        let (mut soup, labels) = strips(4);
+        let depth = depth_map(&labels, &[1.0, 2.0, 3.0, 4.0]);
+        for (i, p) in soup.pieces.iter_mut().enumerate() {
+            p.lambda = (i + 1) as f64;
+        }
+        let before = soup.pieces.clone();
+        // One wild member among two that agree with the soup.
+        let members = [
+            depth_map(&labels, &[1.0, 2.0, 3.0, 4.0]),
+            depth_map(&labels, &[1.0, 2.0, 3.0, 4.0]),
+            depth_map(&labels, &[9.0, 0.1, 30.0, 4.0]),
+        ];
+        assert_eq!(fuse_scales(&mut soup, &labels, &depth, &members), 0);
+        // The relative scales stay (only the median reset may move them all together).
+        let ratio = soup.pieces[0].lambda / before[0].lambda;
+        for (p, q) in soup.pieces.iter().zip(&before) {
+            assert!(
+                (p.lambda / q.lambda - ratio).abs() < 1e-9,
+                "{:?}",
+                soup.pieces
+            );
+        }
+    }
+
+    #[test]
+    fn unknown_depths_and_mismatched_members_are_left_out() {
+        let (mut soup, labels) = strips(3);
+        let depth = depth_map(&labels, &[1.0, f32::NAN, 1.0]);
+        let wrong_size = Grid::filled(7, 7, 5.0f32);
+        let members = [
+            depth_map(&labels, &[1.0, 1.0, 3.0]),
+            depth_map(&labels, &[1.0, 1.0, 3.0]),
+            wrong_size,
+        ];
+        fuse_scales(&mut soup, &labels, &depth, &members);
+        // Piece 1 has no known pixel: it keeps λ (1 before the median reset, whose centre is
+        // piece 0's or 2's factor).
+        let l: Vec<f64> = soup.pieces.iter().map(|p| p.lambda).collect();
+        assert!(l.iter().all(|v| v.is_finite() && *v > 0.0), "{l:?}");
+        assert!((l[2] / l[0] - 3.0).abs() < 1e-9, "{l:?}");
+    }
+
+    #[test]
+    fn member_counts_alternate_around_the_kept_count() {
+        let params = EnsembleParams::default();
+        assert_eq!(params.member_counts(1500), vec![1400, 1600, 1300, 1700]);
+        let one = EnsembleParams {
+            members: 1,
+            ..params
+        };
+        assert!(one.member_counts(1500).is_empty());
+    }
+}
