@@ -15,7 +15,9 @@ use crate::image::Frame;
 use crate::input::FramePair;
 use crate::output::{PointCloud, dense_depth, depth_at, point_clouds, scene_flow, strided_depth};
 use crate::soup::Soup;
-use crate::soup::ensemble::{EnsembleParams, EnsembleReport, SAMPLE_STRIDE, fuse_scales};
+use crate::soup::ensemble::{
+    EnsembleParams, EnsembleReport, MAX_MEMBERS, SAMPLE_STRIDE, fuse_scales,
+};
 use crate::soup::init::{InitParams, unit_scale_soup};
 use crate::soup::refine::{self, RefineParams, RefineReport};
 use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, scale_confidence, solve_scales};
@@ -55,15 +57,15 @@ impl Stage {
             Stage::Motion => "motion",
             Stage::Scales => "scales",
             Stage::Refine => "refine",
-            Stage::Ensemble => "ensemble",
             Stage::Outputs => "outputs",
+            Stage::Ensemble => "ensemble",
         }
     }
 }
 
 /// Every tunable of the pipeline with its default (each documented on its own type). Fields
 /// missing from a deserialised value keep their defaults (parameters saved by an older version;
-/// also inside `init` and `scales`; elsewhere a nested object given in part does not
+/// also inside `init`, `scales` and `ensemble`; elsewhere a nested object given in part does not
 /// deserialise).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 #[serde(default)]
@@ -177,6 +179,9 @@ pub struct Reconstruction {
     pub unit_soup: Soup,
     /// The soup right after the scale solve, before the refinement (median λ = 1).
     pub scaled_soup: Soup,
+    /// The soup right after the refinement, before the fusion (median λ = 1; the same as `soup`
+    /// when no members are fused). `soup eval --oracle` compares the refinement's energies here.
+    pub refined_soup: Soup,
     /// The soup with relative scales, refined and fused with the members' (median λ = 1: the
     /// "organised" soup).
     pub soup: Soup,
@@ -241,14 +246,16 @@ pub fn reconstruct(
         }
     }
     let ensemble = &params.ensemble;
-    if ensemble.members > 1
-        && !(ensemble.count_step >= 0.0
-            && ensemble.count_step * (ensemble.members / 2) as f64 <= 0.5)
+    if ensemble.members > MAX_MEMBERS
+        || (ensemble.members > 1
+            && !(ensemble.count_step > 0.0
+                && ensemble.count_step * (ensemble.members / 2) as f64 <= 0.5))
     {
         return Err(Error::InvalidParameter(format!(
-            "ensemble.count_step {} with {} members: the members' superpixel counts must stay \
-             within half and one and a half times the count (step ≥ 0, step × (members / 2) ≤ 0.5)",
-            ensemble.count_step, ensemble.members
+            "ensemble: {} members with count_step {}: at most {MAX_MEMBERS} members, and with more \
+             than one a step above 0 that keeps their superpixel counts within half and one and \
+             a half times the count (step × (members / 2) ≤ 0.5)",
+            ensemble.members, ensemble.count_step
         )));
     }
     let mut rec = match flow {
@@ -543,6 +550,7 @@ fn reconstruct_from(
         knn,
         unit_soup,
         scaled_soup,
+        refined_soup: soup.clone(),
         soup,
         depth,
         depth_input,
@@ -713,6 +721,14 @@ fn fuse_members(
     }
     let counts = ensemble.member_counts(params.superpixels.count);
     let (mut depths, mut failed) = (Vec::new(), Vec::new());
+    let sampled = |m: Solved| {
+        strided_depth(
+            &m.soup,
+            &m.segmentation.superpixels.labels,
+            k,
+            SAMPLE_STRIDE,
+        )
+    };
     for (i, &count) in counts.iter().enumerate() {
         progress(i as f32 / counts.len() as f32);
         let mut member = *params;
@@ -731,14 +747,6 @@ fn fuse_members(
             &mut Vec::new(),
             &mut |_, _| {},
         );
-        let sampled = |m: Solved| {
-            strided_depth(
-                &m.soup,
-                &m.segmentation.superpixels.labels,
-                k,
-                SAMPLE_STRIDE,
-            )
-        };
         match solved {
             Ok(m) => depths.push(sampled(m)),
             Err(e) => failed.push(format!("{count} superpixels: {e}")),
@@ -749,7 +757,6 @@ fn fuse_members(
         *labels.get(x * SAMPLE_STRIDE, y * SAMPLE_STRIDE)
     });
     let rescaled = fuse_scales(soup, &sampled_labels, &own, &depths);
-    progress(1.0);
     Some(EnsembleReport {
         counts,
         failed,

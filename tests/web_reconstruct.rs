@@ -259,8 +259,7 @@ fn exif_intrinsics_and_defaults_as_json() {
         serde_json::to_value(page_params()).unwrap()
     );
     let mut library = Params::default();
-    library.refine.iterations = library.ensemble.member_iterations;
-    library.refine.particles = library.ensemble.member_particles;
+    (library.refine.iterations, library.refine.particles) = (2, 8);
     assert_eq!(page_params(), library);
     assert_eq!(
         defaults["stages"].as_array().unwrap().len(),

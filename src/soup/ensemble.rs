@@ -22,18 +22,24 @@
 use serde::Serialize;
 
 use super::Soup;
+use super::scales::set_scales;
 use crate::grid::Grid;
-use crate::numeric::{exp, ln};
+use crate::numeric::ln;
 
 /// Settings of the members fused into a reconstruction.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
 #[serde(default)]
 pub struct EnsembleParams {
-    /// Reconstructions fused, the kept one included (1 turns fusion off; the counts must stay
-    /// within 0.5–1.5 × the kept one's: `count_step` × (members / 2) ≤ 0.5). 5: over 1300–1700
-    /// superpixels the mean depth error fell on all nine cases measured (the flag 0.127 →
-    /// 0.098, the creature 0.109 → 0.081, FlyingThings3D 0.318 → 0.298, the crowd 0.190 →
-    /// 0.163); 3 gave about half of that, and 9 (counts ±27 %) no more than 5.
+    /// Reconstructions fused, the kept one included: 1 turns fusion off, at most [`MAX_MEMBERS`],
+    /// and the counts must stay within 0.5–1.5 × the kept one's (`count_step` × (members / 2)
+    /// ≤ 0.5). With an even number (or when a member fails) each pixel's median is the mean of
+    /// the two middle values, so with 2 every piece moves halfway to the one member. 5: over
+    /// 1300–1700 superpixels (preset high) the mean depth error fell on seven of nine cases (the
+    /// creature 0.109 → 0.076, the crowd 0.190 → 0.159, the flag 0.127 → 0.101), kept on the
+    /// table and rose on FlyingThings3D (0.318 → 0.338, its range narrowing from 0.20–0.42 to
+    /// 0.29–0.42). Offline (per-pixel medians of full members): 3 gave less on the flag, the
+    /// creature, the street and the road (0.100, 0.089, 0.020, 0.051 against 0.092, 0.079,
+    /// 0.018, 0.049 with 5), and 9 (counts ±27 %) was not better than 5 overall.
     pub members: usize,
     /// Relative step between the members' superpixel counts: with 5 members and `count`
     /// superpixels they have count × (1 − 2s), (1 − s), (1 + s), (1 + 2s). 1/15, so that 1500
@@ -78,10 +84,14 @@ impl EnsembleParams {
     }
 }
 
+/// The most members [`EnsembleParams::members`] may ask for (each costs a third of a
+/// reconstruction; the page's field stops there too).
+pub const MAX_MEMBERS: usize = 15;
+
 /// The members' depth maps are kept at every `SAMPLE_STRIDE`-th pixel in x and y only: a piece
 /// of 1500 on a 1024 × 768 image has about 500 pixels, so each median still sees about 125,
-/// and four members' maps take 3 MB instead of 12 MB (the page's peak memory rose by 15 MiB
-/// with full maps).
+/// and four members' maps take 3 MB instead of 12 MB (with full maps the 12 MP photo pair's
+/// peak tab memory was 402 MiB, above the page's 400; now 373 MiB).
 pub const SAMPLE_STRIDE: usize = 2;
 
 /// What the fusion did.
@@ -102,15 +112,19 @@ const RESCALED_LOG: f64 = 0.0953; // ln 1.1
 /// Moves each piece of `soup` (its frame-1 labels `labels`, its dense depth `depth`, as
 /// [`crate::output::dense_depth`] makes it) to the scale that the per-pixel median of its
 /// depth and the `members`' depth maps (same size, any global scale, NaN or ≤ 0 = unknown)
-/// gives it, and resets the median λ to 1. A member sharing fewer than 100 known pixels
-/// with `depth` is left out; a piece without a known pixel keeps its scale. Returns how many
-/// pieces changed scale by more than 10 % (after the median reset).
+/// gives it, and resets the median λ to 1 ([`set_scales`]). A member sharing fewer than 100
+/// known pixels with `depth` is left out; a piece without a known pixel keeps its scale; labels
+/// of another size than `depth` change nothing. Returns how many pieces with a known pixel
+/// changed scale by more than 10 % relative to the median change.
 pub fn fuse_scales(
     soup: &mut Soup,
     labels: &Grid<u32>,
     depth: &Grid<f32>,
     members: &[Grid<f32>],
 ) -> usize {
+    if labels.size() != depth.size() {
+        return 0;
+    }
     let own: Vec<f64> = depth.data().iter().map(|&z| log_depth(z)).collect();
     let aligned: Vec<Vec<f64>> = members
         .iter()
@@ -130,17 +144,17 @@ pub fn fuse_scales(
             list.push(median - z);
         }
     }
-    let factors: Vec<f64> = offsets
-        .iter_mut()
-        .map(|o| median(o).unwrap_or(0.0))
+    // Per piece, its log-factor; `None` without a known pixel (it keeps its scale).
+    let factors: Vec<Option<f64>> = offsets.iter_mut().map(|o| median(o)).collect();
+    let mut measured: Vec<f64> = factors.iter().flatten().copied().collect();
+    let centre = median(&mut measured).unwrap_or(0.0);
+    let rescaled = (factors.iter().flatten())
+        .filter(|&&f| (f - centre).abs() > RESCALED_LOG)
+        .count();
+    let logs: Vec<f64> = (soup.pieces.iter().zip(&factors))
+        .map(|(p, f)| ln(p.lambda) + f.unwrap_or(0.0))
         .collect();
-    let mut logs: Vec<f64> = factors.clone();
-    let centre = median(&mut logs).unwrap_or(0.0);
-    let mut rescaled = 0;
-    for (piece, &f) in soup.pieces.iter_mut().zip(&factors) {
-        piece.lambda *= exp(f - centre);
-        rescaled += usize::from((f - centre).abs() > RESCALED_LOG);
-    }
+    set_scales(soup, &logs);
     rescaled
 }
 
@@ -279,6 +293,22 @@ mod tests {
         let l: Vec<f64> = soup.pieces.iter().map(|p| p.lambda).collect();
         assert!(l.iter().all(|v| v.is_finite() && *v > 0.0), "{l:?}");
         assert!((l[2] / l[0] - 3.0).abs() < 1e-9, "{l:?}");
+    }
+
+    #[test]
+    fn the_median_scale_is_one_afterwards() {
+        let (mut soup, labels) = strips(3);
+        for (p, l) in soup.pieces.iter_mut().zip([0.5, 1.0, 2.0]) {
+            p.lambda = l;
+        }
+        let depth = depth_map(&labels, &[0.5, 1.0, 2.0]);
+        // Both members put piece 0 four times as deep as the soup does, relative to the rest.
+        let member = depth_map(&labels, &[2.0, 1.0, 2.0]);
+        fuse_scales(&mut soup, &labels, &depth, &[member.clone(), member]);
+        let mut l: Vec<f64> = soup.pieces.iter().map(|p| p.lambda).collect();
+        assert!((l[0] / l[1] - 2.0).abs() < 1e-9, "{l:?}");
+        l.sort_by(f64::total_cmp);
+        assert!((l[1] - 1.0).abs() < 1e-12, "median λ {l:?}");
     }
 
     #[test]

@@ -84,7 +84,7 @@ pub const PAGE_FLOW_PRESET: Preset = Preset::Medium;
 /// refinement 0.92 s of it in wasm), above the page's 4 s; with the members' settings the
 /// mean depth errors over 1300–1700 superpixels (preset high) moved by at most 0.004
 /// (FlyingThings3D 0.338 → 0.342, street 0.023 → 0.025, the rest within 0.002). The
-/// parameters panel offers the library's.
+/// parameters panel starts from these; the library's 6 and 16 can be typed in there.
 pub fn page_params() -> Params {
     let mut params = Params::default();
     params.refine.iterations = params.ensemble.member_iterations;

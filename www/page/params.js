@@ -1,4 +1,4 @@
-// The parameters panel: filled from the library's defaults, read into the run's options, and
+// The parameters panel: filled from the page's defaults (the library's, but for the flow preset and the refinement), read into the run's options, and
 // the camera intrinsics (from EXIF or the default guess, or the user's own).
 
 import { $, page } from './ui.js';

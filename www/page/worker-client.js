@@ -14,7 +14,7 @@ import { saveSession } from './persist.js';
 
 /** Share of the progress bar per stage (roughly their share of the time on a 1024 × 436 pair). */
 const STAGE_WEIGHTS = {
-  flow: 0.15, superpixels: 0.05, motion: 0.15, scales: 0.05, refine: 0.2, ensemble: 0.35, outputs: 0.05,
+  flow: 0.1, superpixels: 0.05, motion: 0.12, scales: 0.03, refine: 0.05, outputs: 0.02, ensemble: 0.63,
 };
 export const STAGE_LABELS = {
   flow: 'Optical flow',
@@ -22,8 +22,8 @@ export const STAGE_LABELS = {
   motion: 'Motions and planes (unit-scale soup)',
   scales: 'Relative scales (contacts)',
   refine: 'Refinement (particle BP, TRW-S)',
-  ensemble: 'Fusion with other superpixel counts',
   outputs: 'Depth and point clouds',
+  ensemble: 'Fusion with other superpixel counts',
 };
 
 /** Starts the worker; `onFirstReady` runs once, when the page has the library's defaults. */

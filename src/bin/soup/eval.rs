@@ -369,7 +369,12 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     // piece's own rigid motion and plane from the ground truth.
     if params.refine.iterations > 0 {
         let refine_problem = refine::Problem::new(scaled, &inputs, &params.scales, &params.refine);
-        let mut rows = vec![("solution", rec.soup.clone(), false)];
+        // The refinement's own output (before the fusion), and the fused soup where members were
+        // fused: the fusion answers to the median of the members, not to this energy.
+        let mut rows = vec![("solution", rec.refined_soup.clone(), false)];
+        if rec.report.ensemble.is_some() {
+            rows.push(("solution fused", rec.soup.clone(), false));
+        }
         rows.push(("truth", at(&oracle), true));
         if let (Some(flow), Some(depth12)) = (&case.flow12, &case.depth12) {
             let labels = &rec.superpixels.labels;
