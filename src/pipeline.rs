@@ -207,6 +207,18 @@ impl Reconstruction {
         )
     }
 
+    /// The inputs of the scale and refinement energies over this reconstruction's superpixels,
+    /// graphs, flow and intrinsics (to evaluate them, or a soup's confidence, again).
+    pub fn scale_inputs(&self) -> ScaleInputs<'_> {
+        ScaleInputs {
+            superpixels: &self.superpixels,
+            boundaries: &self.boundaries,
+            flow: &self.flow,
+            reliable: &self.reliable,
+            intrinsics: &self.report.camera.intrinsics,
+        }
+    }
+
     /// Per pixel of frame 1 (working resolution): the scene flow X' − X in camera 1's frame,
     /// NaN where unknown (see [`scene_flow`]). Computed when asked, like [`Self::clouds`].
     pub fn scene_flow(&self) -> Grid<[f32; 3]> {
@@ -604,14 +616,8 @@ fn fuse(
         &mut |f| progress(Stage::Ensemble, f),
     );
     if ensemble.is_some() {
-        let inputs = ScaleInputs {
-            superpixels: &rec.superpixels,
-            boundaries: &rec.boundaries,
-            flow: &rec.flow,
-            reliable: &rec.reliable,
-            intrinsics: &k,
-        };
-        let (confidence, depth, depth_input) = outputs(pair, &rec.soup, &inputs, params);
+        let (confidence, depth, depth_input) =
+            outputs(pair, &rec.soup, &rec.scale_inputs(), params);
         (rec.depth, rec.depth_input) = (depth, depth_input);
         rec.report.unconfident = unconfident(&confidence, params);
         rec.report.confidence = confidence;

@@ -13,7 +13,7 @@ use superpixel_soup::formats::write_file;
 use superpixel_soup::grid::Grid;
 use superpixel_soup::input::{DEFAULT_MAX_SIDE, prepare_pair};
 use superpixel_soup::output::{depth_at, nearest_label};
-use superpixel_soup::soup::scales::{self, ScaleInputs};
+use superpixel_soup::soup::scales;
 use superpixel_soup::soup::{Soup, refine};
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, Result, reconstruct};
 
@@ -310,13 +310,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
         .zip(&solved)
         .map(|(r, &s)| r.unwrap_or(s))
         .collect();
-    let inputs = ScaleInputs {
-        superpixels: &rec.superpixels,
-        boundaries: &rec.boundaries,
-        flow: &rec.flow,
-        reliable: &rec.reliable,
-        intrinsics: &rec.report.camera.intrinsics,
-    };
+    let inputs = rec.scale_inputs();
     let params = &rec.report.params;
     let mre_of = |soup: &Soup| -> Result<f64> {
         Ok(depth_metrics(gt, &depth_at(soup, labels, w, h, &k_in))?.mre)
