@@ -39,6 +39,10 @@ const PIXEL_STRIDE: usize = 4;
 /// 1–3 in log-depth under it there).
 const BELOW_QUANTILE: f64 = 0.5;
 
+/// A piece rests on the ground only where at least this many of its pixels sit directly above
+/// ground pixels (fewer is a corner grazing the floor, whose plane is least reliable there).
+pub const MIN_RESTING_PIXELS: usize = 3;
+
 /// The ground plane of `soup`'s static world: among the `candidates` (pieces of one rigid
 /// segment, so their unit-scale planes share a scale), those with a ground-like plane vote for
 /// each other's planes by pixels; the plane with the most pixels within 5 % in depth
@@ -157,6 +161,75 @@ pub fn depth_below_ground(
     Some(below[k])
 }
 
+/// Where piece `i` rests on the ground: for each of its pixels p whose pixel below (p + width)
+/// belongs to another piece of the static world (`world`) that lies on `ground` there (within
+/// `ON_PLANE_LOG_GAP`), ln z̄_i(p) − ln z̄_G(p): the log-depth of the piece's plane over that
+/// of the ground on the ray of p, at equal scale (unit-scale planes, like
+/// [`depth_below_ground`]). At log-scale s_i the piece's bottom then lies that much plus
+/// s_i − s_G behind the ground it rests on. Empty for a piece with fewer than
+/// [`MIN_RESTING_PIXELS`] such pixels.
+pub fn resting_gaps(
+    soup: &Soup,
+    superpixels: &Superpixels,
+    intrinsics: &Intrinsics,
+    ground: &Vector3<f64>,
+    world: &[bool],
+    i: usize,
+) -> Vec<f64> {
+    let width = superpixels.labels.width();
+    let labels = superpixels.labels.data();
+    let own = soup.pieces[i].m;
+    let gaps: Vec<f64> = superpixels.segments[i]
+        .pixels
+        .iter()
+        .filter_map(|&p| {
+            let q = p as usize + width;
+            let j = *labels.get(q)? as usize;
+            if j == i || !world[j] {
+                return None;
+            }
+            let below = pixel_ray(intrinsics, width, q as u32);
+            let (g, floor) = (ground.dot(&below), soup.pieces[j].m.dot(&below));
+            let on_ground = g > 0.0 && floor > 0.0 && (ln(g) - ln(floor)).abs() < ON_PLANE_LOG_GAP;
+            // Both planes on the piece's own bottom pixel, where it would touch the ground.
+            let ray = pixel_ray(intrinsics, width, p);
+            let (g, here) = (ground.dot(&ray), own.dot(&ray));
+            (on_ground && g > 0.0 && here > 0.0).then(|| ln(g) - ln(here))
+        })
+        .collect();
+    if gaps.len() < MIN_RESTING_PIXELS {
+        Vec::new()
+    } else {
+        gaps
+    }
+}
+
+/// The share of the image's bottom tenth of rows that shows the ground: pixels of the static
+/// world's pieces (`world`) whose unit-scale planes lie on `ground` there (within
+/// `ON_PLANE_LOG_GAP`). A floor that things stand on runs to the near edge of the view; a
+/// ground-like plane found among floating things (FlyingThings3D) does not.
+pub fn bottom_share(
+    soup: &Soup,
+    superpixels: &Superpixels,
+    intrinsics: &Intrinsics,
+    ground: &Vector3<f64>,
+    world: &[bool],
+) -> f64 {
+    let labels = &superpixels.labels;
+    let (width, height) = labels.size();
+    let rows = (height / 10).max(1);
+    let first = (height - rows) * width;
+    let on_ground = (first..width * height)
+        .filter(|&p| {
+            let j = labels.data()[p] as usize;
+            let r = pixel_ray(intrinsics, width, p as u32);
+            let (g, own) = (ground.dot(&r), soup.pieces[j].m.dot(&r));
+            world[j] && g > 0.0 && own > 0.0 && (ln(g) - ln(own)).abs() < ON_PLANE_LOG_GAP
+        })
+        .count();
+    on_ground as f64 / (rows * width).max(1) as f64
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -270,5 +343,49 @@ mod tests {
         );
         // Above the horizon no ray meets the floor.
         assert_eq!(depth_below_ground(&soup, &sp, &K, &FLOOR, 2 * 10 + 3), None);
+    }
+    #[test]
+    fn a_piece_standing_on_the_floor_rests_on_it_at_its_bottom_row() {
+        let (mut soup, sp) = room(6);
+        let world = vec![true; soup.pieces.len()];
+        // Piece 53 (row 5, just above the floor's rows) as a mover's upright face at depth z.
+        // Its bottom pixels (row 59) sit on the floor's piece 63; the floor on their rays lies
+        // at 2 / ((59 − 49.5) / 100), so the gap is ln(z (59 − 49.5) / 200).
+        let z = 30.0;
+        soup.pieces[53].m = Vector3::new(0.0, 0.0, 1.0 / z);
+        soup.pieces[53].hypothesis = 1;
+        let gaps = resting_gaps(&soup, &sp, &K, &FLOOR, &world, 53);
+        assert_eq!(gaps.len(), 10, "one per pixel of the bottom row");
+        let expected = (z * (59.0 - 49.5) / 200.0f64).ln();
+        for g in &gaps {
+            assert!((g - expected).abs() < 1e-9, "{g} against {expected}");
+        }
+        // Only the static world's pieces on the ground carry it: not when the piece below is
+        // no world piece, nor where that piece does not lie on the ground.
+        let mut not_world = world.clone();
+        not_world[63] = false;
+        assert!(resting_gaps(&soup, &sp, &K, &FLOOR, &not_world, 53).is_empty());
+        let mut lifted = soup.clone();
+        lifted.pieces[63].m = FLOOR * 1.2;
+        assert!(resting_gaps(&lifted, &sp, &K, &FLOOR, &world, 53).is_empty());
+        // A piece above a wall piece rests on nothing.
+        assert!(resting_gaps(&soup, &sp, &K, &FLOOR, &world, 43).is_empty());
+    }
+
+    #[test]
+    fn the_bottom_share_is_the_ground_seen_along_the_bottom_rows() {
+        let (soup, sp) = room(6);
+        let all = vec![true; soup.pieces.len()];
+        assert_eq!(bottom_share(&soup, &sp, &K, &FLOOR, &all), 1.0);
+        // Not the static world's: not the ground.
+        let none = vec![false; soup.pieces.len()];
+        assert_eq!(bottom_share(&soup, &sp, &K, &FLOOR, &none), 0.0);
+        // Three of the ten bottom pieces on the wall instead: 70 % of the bottom rows.
+        let mut wall = soup.clone();
+        for i in [90, 91, 92] {
+            wall.pieces[i].m = Vector3::new(0.0, 0.0, 0.1);
+        }
+        let share = bottom_share(&wall, &sp, &K, &FLOOR, &all);
+        assert!((share - 0.7).abs() < 1e-12, "{share}");
     }
 }
