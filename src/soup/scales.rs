@@ -1899,6 +1899,30 @@ mod tests {
         }
     }
 
+    /// A two-segment soup solved with `params`: the static world's segment (on the ego-motion)
+    /// and a mover's, by the piece-to-segment map `segment`; `roles` = (a piece of the mover, a
+    /// piece of the world, the mover's segment centre, the world's). `setup` gives the
+    /// segments the prior's inputs. Returns the mover's log-scale over the world's.
+    fn mover_over_world(
+        problem: &Problem,
+        segment: &[usize],
+        roles: (usize, usize, f64, f64),
+        params: &ScaleParams,
+        setup: impl Fn(&mut Segments),
+    ) -> f64 {
+        let (mover, world, mover_centre, world_centre) = roles;
+        let (g_mover, g_world) = (segment[mover], segment[world]);
+        let mut centre = [0.0; 2];
+        centre[g_mover] = mover_centre;
+        centre[g_world] = world_centre;
+        let mut ego = [false; 2];
+        ego[g_world] = true;
+        let mut segments = segments_of(segment, &centre, &ego);
+        setup(&mut segments);
+        let u = solve_segments(problem, &segments, params, None).0;
+        (centre[g_mover] + u[g_mover]) - (centre[g_world] + u[g_world])
+    }
+
     /// World pieces 0–1–2 in a chain of certain contacts that meet at equal scale, and piece 3
     /// touching them only through `contact` (a link of piece 3 and piece 0).
     fn world_and_one_piece(contact: Link) -> Problem {
@@ -2039,22 +2063,16 @@ mod tests {
             let segment: Vec<usize> = (0..4)
                 .map(|i| usize::from((i == mover) == (mover == 3)))
                 .collect();
-            let (g_mover, g_world) = (segment[mover], segment[world[0]]);
-            let mut centre = [0.0; 2];
-            centre[g_mover] = -0.2;
-            centre[g_world] = 0.7;
             let placement = |ground_weight: f64| {
                 let params = ScaleParams {
                     behind_weight: 0.0,
                     ground_weight,
                     ..ScaleParams::default()
                 };
-                let mut ego = [false; 2];
-                ego[g_world] = true;
-                let mut segments = segments_of(&segment, &centre, &ego);
-                segments.below[mover] = Some(-0.5);
-                let u = solve_segments(&problem, &segments, &params, None).0;
-                (centre[g_mover] + u[g_mover]) - (centre[g_world] + u[g_world])
+                let roles = (mover, world[0], -0.2, 0.7);
+                mover_over_world(&problem, &segment, roles, &params, |segments| {
+                    segments.below[mover] = Some(-0.5);
+                })
             };
             let glued = placement(0.0);
             assert!((glued - 1.0).abs() < 1e-9, "mover {mover}: {glued}");
@@ -2072,22 +2090,15 @@ mod tests {
         // first or the second, at non-zero centres.
         let problem = world_and_one_piece(link(3, 0, 0.5, -1.0));
         for segment in [[0, 0, 0, 1], [1, 1, 1, 0]] {
-            let (g_mover, g_world) = (segment[3], segment[0]);
-            let mut centre = [0.0; 2];
-            centre[g_mover] = 0.3;
-            centre[g_world] = -0.6;
             let placement = |rest_weight: f64| {
                 let params = ScaleParams {
                     behind_weight: 0.0,
                     rest_weight,
                     ..ScaleParams::default()
                 };
-                let mut ego = [false; 2];
-                ego[g_world] = true;
-                let mut segments = segments_of(&segment, &centre, &ego);
-                segments.resting[3] = vec![-0.4; 5];
-                let u = solve_segments(&problem, &segments, &params, None).0;
-                (centre[g_mover] + u[g_mover]) - (centre[g_world] + u[g_world])
+                mover_over_world(&problem, &segment, (3, 0, 0.3, -0.6), &params, |segments| {
+                    segments.resting[3] = vec![-0.4; 5];
+                })
             };
             let glued = placement(0.0);
             assert!((glued - 1.0).abs() < 1e-9, "{segment:?}: {glued}");
