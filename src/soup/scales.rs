@@ -186,14 +186,15 @@ pub struct ScaleParams {
     /// or behind. A walker touches the world only where its feet meet the floor, through 2–3
     /// weak links across colour edges, and with computed flow contacts alone left the crowd's
     /// walkers 1.3–4.5× too near; the floor under their bottom pixels gave their true scale
-    /// within 0.05 (log) on 88 % of those pixels. 1.5: 1–3 measured within 0.007 of each
-    /// other, 3 raised the creature with exact flow from 0.024 to 0.048. 0 switches it off.
+    /// within 0.1 (log) on 88 % of those pixels. 1.5: 1–3 measured within 0.008 of each
+    /// other, 3 raised the creature with exact flow from 0.024 to 0.048. 0 switches it off, as
+    /// does a zero `ground_weight` (no ground at all).
     pub rest_weight: f64,
     /// The rest prior acts only where the ground covers at least this share of the image's
     /// bottom tenth ([`ground::bottom_share`]): a floor that things stand on runs to the near
     /// edge of the view (0.71–0.94 on our street, road, crowd, creature and table, 0.89 on the
     /// motorcycle), while a ground-like plane among floating things does not (FlyingThings3D:
-    /// 0.44–0.49, where the floor under a flying object put it 3–5× too far).
+    /// 0.45–0.49, where the floor under a flying object put it 3–5.5× too far).
     pub rest_bottom_share: f64,
     /// Flow jump (px) across a boundary below which the flow counts as continuous there, where
     /// enough of it is trusted (`continuity_trusted_share`): a depth edge needs a flow edge to
@@ -854,7 +855,8 @@ pub fn segment_descent_from(
 /// which part of it ranks the truth above the solution.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SegmentObjective {
-    /// Contacts between segments and the static prior.
+    /// Contacts between segments, the static prior and the rest prior (all truncated-linear
+    /// terms).
     pub contacts: f64,
     /// The figure prior.
     pub figure: f64,
@@ -933,6 +935,9 @@ fn parallax_px(piece: &Piece, inputs: &ScaleInputs, anchor: [f64; 2]) -> f64 {
 /// log-depth gaps ln z_i − ln z_G of its resting pixels over the ground, which is fitted to the
 /// static world's well-measured pieces each at its own scale.
 fn resting_at_scales(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Vec<Vec<f64>> {
+    if params.rest_weight <= 0.0 {
+        return vec![Vec::new(); soup.pieces.len()];
+    }
     let world = world_pieces(soup, inputs, params.world_parallax);
     let mut absolute = soup.clone();
     for piece in &mut absolute.pieces {
@@ -1097,7 +1102,8 @@ fn solve_segments(
 /// log-scale s = centre + u).
 #[derive(Clone, Debug, Default)]
 struct Pair {
-    /// Their links' contact terms: Σ w min(|d + c|, σ).
+    /// Their links' contact terms and the rest prior's (and the static prior's): Σ w min(|d + c|,
+    /// σ).
     terms: Vec<(f64, f64)>,
     /// The figure prior, one step per link: the smaller segment's cost for lying behind the
     /// larger one, where the weighted median of the link's frame-1 gaps puts it more than σ
@@ -1122,14 +1128,14 @@ impl Pair {
     }
 }
 
-/// Every pair of segments (g < h) that touch or share a prior (the static and ground priors tie
-/// segments to the static world's) and its [`Pair`].
+/// Every pair of segments (g < h) that touch or share a prior (the static, ground and rest priors
+/// tie segments to the static world's) and its [`Pair`].
 type PairTerms = std::collections::BTreeMap<(usize, usize), Pair>;
 
 /// Every link between two different segments, gathered into [`PairTerms`], with the figure
 /// prior ([`ScaleParams::behind_weight`]) where the smaller segment is a mover and the flow
-/// across the link is not continuous and trusted, and the static prior
-/// ([`ScaleParams::static_weight`]).
+/// across the link is not continuous and trusted, the ground prior, the rest prior
+/// ([`ScaleParams::rest_weight`]) and the static prior ([`ScaleParams::static_weight`]).
 fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScaleParams) -> PairTerms {
     let Segments {
         segment,
@@ -1716,7 +1722,8 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
         full[ga] += weight;
         full[gb] += weight;
     }
-    // A mover resting on the ground is held by the rest prior as by `rest_weight` contacts.
+    // A mover resting on the ground is held by the rest prior as by `rest_weight` contacts, per
+    // resting piece.
     let sigma = problem.sigma;
     for (i, gaps) in resting_at_scales(soup, inputs, params).iter().enumerate() {
         let g = segment[i];

@@ -322,7 +322,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
     };
     println!("truth test of {}:", case.name);
     println!(
-        "| energy | state | E | segment solve: contacts and static prior + figure prior + ground prior | MRE |"
+        "| energy | state | E | segment solve: contacts, static and rest priors + figure prior + ground prior | MRE |"
     );
     println!("| --- | --- | --- | --- | --- |");
     // The scale energy over per-piece log-scales of the unit-scale soup's planes and motions.
