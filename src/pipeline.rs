@@ -440,6 +440,23 @@ impl Segmentation {
         })
     }
 
+    /// The inputs of the scale and refinement energies over these superpixels and graphs, with
+    /// `flow` (its trusted vectors `reliable`) and intrinsics `k`, all at the working resolution.
+    fn scale_inputs<'a>(
+        &'a self,
+        flow: &'a FlowField,
+        reliable: &'a Grid<bool>,
+        k: &'a Intrinsics,
+    ) -> ScaleInputs<'a> {
+        ScaleInputs {
+            superpixels: &self.superpixels,
+            boundaries: &self.boundaries,
+            flow,
+            reliable,
+            intrinsics: k,
+        }
+    }
+
     /// A copy of `rec`'s.
     fn of(rec: &Reconstruction) -> Self {
         Segmentation {
@@ -506,6 +523,11 @@ fn reconstruct_from(
         &mut timings,
         progress,
     )?;
+    progress(Stage::Outputs, 0.0);
+    let inputs = solved.segmentation.scale_inputs(&flow, &reliable, &k);
+    let (confidence, depth, depth_input) = outputs(pair, &solved.soup, &inputs, params);
+    timings.push((Stage::Outputs, clock.lap()));
+    progress(Stage::Outputs, 1.0);
     let Solved {
         segmentation:
             Segmentation {
@@ -519,18 +541,6 @@ fn reconstruct_from(
         scales,
         refine,
     } = solved;
-
-    progress(Stage::Outputs, 0.0);
-    let inputs = ScaleInputs {
-        superpixels: &sp,
-        boundaries: &boundaries,
-        flow: &flow,
-        reliable: &reliable,
-        intrinsics: &k,
-    };
-    let (confidence, depth, depth_input) = outputs(pair, &soup, &inputs, params);
-    timings.push((Stage::Outputs, clock.lap()));
-    progress(Stage::Outputs, 1.0);
 
     let report = Report {
         camera: pair.camera,
@@ -678,13 +688,7 @@ fn solve_soup(
 
     progress(Stage::Scales, 0.0);
     let mut soup = unit_soup.clone();
-    let inputs = ScaleInputs {
-        superpixels: sp,
-        boundaries: &segmentation.boundaries,
-        flow,
-        reliable,
-        intrinsics: k,
-    };
+    let inputs = segmentation.scale_inputs(flow, reliable, k);
     let scales = solve_scales(&mut soup, &inputs, &params.scales);
     let scaled_soup = soup.clone();
     timings.push((Stage::Scales, clock.lap()));

@@ -71,10 +71,7 @@ pub fn ground_plane(
     let on_plane = |m: &Vector3<f64>| -> Vec<usize> {
         ground_like
             .iter()
-            .filter(|&&(i, r)| {
-                let (a, b) = (m.dot(&r), soup.pieces[i].m.dot(&r));
-                a > 0.0 && (ln(a) - ln(b)).abs() < ON_PLANE_LOG_GAP
-            })
+            .filter(|&&(i, r)| on_plane(m, &soup.pieces[i].m, &r))
             .map(|&(i, _)| i)
             .collect()
     };
@@ -121,6 +118,29 @@ fn fit_plane(
     }
     let m = xtx.try_inverse()? * xt1;
     m.iter().all(|v| v.is_finite()).then_some(m)
+}
+
+/// Whether the unit-scale plane `m` lies on `ground` along `ray`: both in front of the camera,
+/// their depths within `ON_PLANE_LOG_GAP` in log.
+fn on_plane(ground: &Vector3<f64>, m: &Vector3<f64>, ray: &Vector3<f64>) -> bool {
+    let (g, own) = (ground.dot(ray), m.dot(ray));
+    g > 0.0 && own > 0.0 && (ln(g) - ln(own)).abs() < ON_PLANE_LOG_GAP
+}
+
+/// Whether pixel index `p` shows the ground: its piece is one of the static world's (`world`)
+/// and lies on `ground` there ([`on_plane`]).
+fn shows_ground(
+    soup: &Soup,
+    superpixels: &Superpixels,
+    intrinsics: &Intrinsics,
+    ground: &Vector3<f64>,
+    world: &[bool],
+    p: usize,
+) -> bool {
+    let labels = &superpixels.labels;
+    let j = labels.data()[p] as usize;
+    let ray = pixel_ray(intrinsics, labels.width(), p as u32);
+    world[j] && on_plane(ground, &soup.pieces[j].m, &ray)
 }
 
 /// The normalised ray (z = 1) of pixel index `p` (y · width + x).
@@ -186,17 +206,14 @@ pub fn resting_gaps(
         .iter()
         .filter_map(|&p| {
             let q = p as usize + width;
-            let j = *labels.get(q)? as usize;
-            if j == i || !world[j] {
+            let below_is_other = *labels.get(q)? as usize != i;
+            if !(below_is_other && shows_ground(soup, superpixels, intrinsics, ground, world, q)) {
                 return None;
             }
-            let below = pixel_ray(intrinsics, width, q as u32);
-            let (g, floor) = (ground.dot(&below), soup.pieces[j].m.dot(&below));
-            let on_ground = g > 0.0 && floor > 0.0 && (ln(g) - ln(floor)).abs() < ON_PLANE_LOG_GAP;
             // Both planes on the piece's own bottom pixel, where it would touch the ground.
             let ray = pixel_ray(intrinsics, width, p);
             let (g, here) = (ground.dot(&ray), own.dot(&ray));
-            (on_ground && g > 0.0 && here > 0.0).then(|| ln(g) - ln(here))
+            (g > 0.0 && here > 0.0).then(|| ln(g) - ln(here))
         })
         .collect();
     if gaps.len() < MIN_RESTING_PIXELS {
@@ -225,12 +242,7 @@ pub fn bottom_share(
     let rows = (height / 10).max(1);
     let first = (height - rows) * width;
     let on_ground = (first..width * height)
-        .filter(|&p| {
-            let j = labels.data()[p] as usize;
-            let r = pixel_ray(intrinsics, width, p as u32);
-            let (g, own) = (ground.dot(&r), soup.pieces[j].m.dot(&r));
-            world[j] && g > 0.0 && own > 0.0 && (ln(g) - ln(own)).abs() < ON_PLANE_LOG_GAP
-        })
+        .filter(|&p| shows_ground(soup, superpixels, intrinsics, ground, world, p))
         .count();
     on_ground as f64 / (rows * width).max(1) as f64
 }

@@ -676,52 +676,73 @@ fn static_world(sizes: &[usize], ego: &[bool]) -> Option<usize> {
         .max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)))
 }
 
-/// The ground's terms per piece, at equal scales: how far each piece lies under the static
-/// world's ground (see `Segments::below`), and where each piece on a motion of its own rests on
-/// it (see `Segments::resting`). The ground is fitted to the well-measured pieces of the static
-/// world (`world_piece`), which share the ego-motion's unit scale whatever segment they end in.
-/// Pieces without a plane of their own count too: near the epipole a car driving ahead has too
-/// little parallax for one, and its borrowed camera-facing planes are what sinks (leaving them
-/// out took the road with exact flow from 0.048 to 0.061). All `None` and empty without a ground
-/// in view or with a zero [`ScaleParams::ground_weight`].
-fn ground_terms(
+/// The static world's ground plane at the unit scale of `world_piece` (the well-measured pieces
+/// of the static world, which share the ego-motion's unit scale whatever segment they end in;
+/// see [`ground::ground_plane`]). `None` without a ground in view or with a zero
+/// [`ScaleParams::ground_weight`].
+fn world_ground(
     soup: &Soup,
     inputs: &ScaleInputs,
     world_piece: &[bool],
     params: &ScaleParams,
-) -> (Vec<Option<f64>>, Vec<Vec<f64>>) {
-    let (superpixels, intrinsics) = (inputs.superpixels, inputs.intrinsics);
-    let n = soup.pieces.len();
-    let plane = (params.ground_weight > 0.0)
+) -> Option<Vector3<f64>> {
+    (params.ground_weight > 0.0)
         .then(|| {
             ground::ground_plane(
                 soup,
-                superpixels,
-                intrinsics,
+                inputs.superpixels,
+                inputs.intrinsics,
                 world_piece,
                 params.ground_share,
             )
         })
-        .flatten();
-    let Some(plane) = plane else {
-        return (vec![None; n], vec![Vec::new(); n]);
-    };
-    let below = (0..n)
-        .map(|i| ground::depth_below_ground(soup, superpixels, intrinsics, &plane, i))
-        .collect();
-    let rests = params.rest_weight > 0.0
-        && ground::bottom_share(soup, superpixels, intrinsics, &plane, world_piece)
-            >= params.rest_bottom_share;
-    let resting = (0..n)
+        .flatten()
+}
+
+/// Per piece, how far it lies under `plane` at equal scales (see `Segments::below`). Pieces
+/// without a plane of their own count too: near the epipole a car driving ahead has too little
+/// parallax for one, and its borrowed camera-facing planes are what sinks (leaving them out took
+/// the road with exact flow from 0.048 to 0.061). All `None` without a plane.
+fn depths_below(
+    soup: &Soup,
+    inputs: &ScaleInputs,
+    plane: Option<&Vector3<f64>>,
+) -> Vec<Option<f64>> {
+    (0..soup.pieces.len())
         .map(|i| {
-            if rests && soup.pieces[i].hypothesis != 0 {
-                ground::resting_gaps(soup, superpixels, intrinsics, &plane, world_piece, i)
-            } else {
-                Vec::new()
-            }
+            plane.and_then(|m| {
+                ground::depth_below_ground(soup, inputs.superpixels, inputs.intrinsics, m, i)
+            })
         })
-        .collect();
-    (below, resting)
+        .collect()
+}
+
+/// Per piece on a motion of its own, where it rests on `plane` (see `Segments::resting`): the
+/// log-depth gaps of its resting pixels ([`ground::resting_gaps`]). All empty without a plane,
+/// with a zero [`ScaleParams::rest_weight`], or where the ground covers less than
+/// [`ScaleParams::rest_bottom_share`] of the view's bottom rows.
+fn resting_on(
+    soup: &Soup,
+    inputs: &ScaleInputs,
+    world_piece: &[bool],
+    plane: Option<&Vector3<f64>>,
+    params: &ScaleParams,
+) -> Vec<Vec<f64>> {
+    let (superpixels, intrinsics) = (inputs.superpixels, inputs.intrinsics);
+    let rests = |m: &Vector3<f64>| {
+        params.rest_weight > 0.0
+            && ground::bottom_share(soup, superpixels, intrinsics, m, world_piece)
+                >= params.rest_bottom_share
+    };
+    let plane = plane.filter(|m| rests(m));
+    (0..soup.pieces.len())
+        .map(|i| match plane {
+            Some(m) if soup.pieces[i].hypothesis != 0 => {
+                ground::resting_gaps(soup, superpixels, intrinsics, m, world_piece, i)
+            }
+            _ => Vec::new(),
+        })
+        .collect()
 }
 
 impl Segments {
@@ -737,7 +758,9 @@ impl Segments {
     fn new(soup: &Soup, inputs: &ScaleInputs, problem: &Problem, params: &ScaleParams) -> Self {
         let n = soup.pieces.len();
         let world_piece = world_pieces(soup, inputs, params.world_parallax);
-        let (below, resting) = ground_terms(soup, inputs, &world_piece, params);
+        let plane = world_ground(soup, inputs, &world_piece, params);
+        let below = depths_below(soup, inputs, plane.as_ref());
+        let resting = resting_on(soup, inputs, &world_piece, plane.as_ref(), params);
         let labels = &inputs.superpixels.labels;
         let (width, height) = (labels.width() as u32, labels.height() as u32);
         let sunk: Vec<bool> = (soup.pieces.iter().zip(&below))
@@ -946,7 +969,8 @@ fn resting_at_scales(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
         piece.m /= piece.lambda;
         piece.lambda = 1.0;
     }
-    ground_terms(&absolute, inputs, &world, params).1
+    let plane = world_ground(&absolute, inputs, &world, params);
+    resting_on(&absolute, inputs, &world, plane.as_ref(), params)
 }
 
 /// Sets every piece's λ = e^(s_i), normalised so the median λ is 1.
