@@ -479,7 +479,6 @@ fn reconstruct_from(
 ) -> Result<Reconstruction> {
     let (w, h) = pair.frame1.size();
     let k = pair.camera.intrinsics;
-    let mut timings = Vec::new();
     let mut clock = Clock::start();
     let mut notes = pair.notes.clone();
 
@@ -510,23 +509,19 @@ fn reconstruct_from(
             "the flow is zero everywhere (identical frames?)".into(),
         ));
     }
-    timings.push((Stage::Flow, clock.lap()));
+    clock.lap(Stage::Flow);
 
-    let solved = solve_soup(
-        &pair.frame1,
-        &k,
-        &flow,
-        &reliable,
-        params,
-        segmentation,
-        &mut clock,
-        &mut timings,
-        progress,
-    )?;
+    let seen = Observed {
+        frame1: &pair.frame1,
+        k: &k,
+        flow: &flow,
+        reliable: &reliable,
+    };
+    let solved = solve_soup(seen, params, segmentation, &mut clock, progress)?;
     progress(Stage::Outputs, 0.0);
     let inputs = solved.segmentation.scale_inputs(&flow, &reliable, &k);
     let (confidence, depth, depth_input) = outputs(pair, &solved.soup, &inputs, params);
-    timings.push((Stage::Outputs, clock.lap()));
+    clock.lap(Stage::Outputs);
     progress(Stage::Outputs, 1.0);
     let Solved {
         segmentation:
@@ -547,7 +542,7 @@ fn reconstruct_from(
         working_size: (w, h),
         input_size: pair.input_size,
         params: *params,
-        timings_ms: timings,
+        timings_ms: clock.laps,
         flow: flow_params,
         reliable_flow: trusted_share(&reliable),
         superpixels: sp.len(),
@@ -616,10 +611,14 @@ fn fuse(
     let mut clock = Clock::start();
     progress(Stage::Ensemble, 0.0);
     let k = rec.report.camera.intrinsics;
+    let seen = Observed {
+        frame1: &rec.frame1,
+        k: &k,
+        flow: &rec.flow,
+        reliable: &rec.reliable,
+    };
     let ensemble = fuse_members(
-        &rec.frame1,
-        &k,
-        (&rec.flow, &rec.reliable),
+        seen,
         params,
         &rec.superpixels.labels,
         &mut rec.soup,
@@ -633,7 +632,8 @@ fn fuse(
         rec.report.confidence = confidence;
     }
     rec.report.ensemble = ensemble;
-    rec.report.timings_ms.push((Stage::Ensemble, clock.lap()));
+    clock.lap(Stage::Ensemble);
+    rec.report.timings_ms.extend(clock.laps);
     progress(Stage::Ensemble, 1.0);
 }
 
@@ -650,21 +650,34 @@ struct Solved {
     refine: Option<RefineReport>,
 }
 
-/// The soup stages of one pass over a flow (working resolution, `reliable` marking the vectors
-/// to trust): superpixels of `frame1` (or a copy of `segmentation`), unit-scale soup, scales
-/// and refinement, with `params`. Each stage's milliseconds go onto `timings`.
-#[allow(clippy::too_many_arguments)]
+/// What one pass of the soup stages sees, all at the working resolution.
+#[derive(Clone, Copy)]
+struct Observed<'a> {
+    frame1: &'a Frame,
+    /// Intrinsics of the working resolution.
+    k: &'a Intrinsics,
+    /// Flow 1→2 (px).
+    flow: &'a FlowField,
+    /// The flow vectors to trust (known, and through the forward–backward check when computed).
+    reliable: &'a Grid<bool>,
+}
+
+/// The soup stages of one pass over what `seen` shows: superpixels of its frame 1 (or a copy of
+/// `segmentation`), unit-scale soup, scales and refinement, with `params`. Each stage is timed
+/// on `clock`.
 fn solve_soup(
-    frame1: &Frame,
-    k: &Intrinsics,
-    flow: &FlowField,
-    reliable: &Grid<bool>,
+    seen: Observed,
     params: &Params,
     segmentation: Option<&Segmentation>,
     clock: &mut Clock,
-    timings: &mut Vec<(Stage, f64)>,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Solved> {
+    let Observed {
+        frame1,
+        k,
+        flow,
+        reliable,
+    } = seen;
     progress(Stage::Superpixels, 0.0);
     let segmentation = match segmentation {
         Some(shared) => shared.clone(),
@@ -672,7 +685,7 @@ fn solve_soup(
     };
     let sp = &segmentation.superpixels;
     let adjacency = segmentation.boundaries.adjacency(sp.len());
-    timings.push((Stage::Superpixels, clock.lap()));
+    clock.lap(Stage::Superpixels);
 
     progress(Stage::Motion, 0.0);
     let unit_soup = unit_scale_soup(
@@ -684,21 +697,21 @@ fn solve_soup(
         k,
         &params.init,
     )?;
-    timings.push((Stage::Motion, clock.lap()));
+    clock.lap(Stage::Motion);
 
     progress(Stage::Scales, 0.0);
     let mut soup = unit_soup.clone();
     let inputs = segmentation.scale_inputs(flow, reliable, k);
     let scales = solve_scales(&mut soup, &inputs, &params.scales);
     let scaled_soup = soup.clone();
-    timings.push((Stage::Scales, clock.lap()));
+    clock.lap(Stage::Scales);
 
     progress(Stage::Refine, 0.0);
     let refine = (params.refine.iterations > 0).then(|| {
         let problem = refine::Problem::new(&soup, &inputs, &params.scales, &params.refine);
         refine::refine(&mut soup, &problem)
     });
-    timings.push((Stage::Refine, clock.lap()));
+    clock.lap(Stage::Refine);
     Ok(Solved {
         segmentation,
         unit_soup,
@@ -710,16 +723,14 @@ fn solve_soup(
 }
 
 /// Fuses members into `soup` (frame-1 labels `labels`) when `params.ensemble.members` is more
-/// than 1 (see [`crate::soup::ensemble`]): each member is [`solve_soup`] over the same flow
-/// (`flow`: the field and its trusted mask) from one of
+/// than 1 (see [`crate::soup::ensemble`]): each member is [`solve_soup`] over what `seen` shows
+/// from one of
 /// [`EnsembleParams::member_counts`] superpixels, with the members' cheaper refinement; their
 /// depth maps (at every [`SAMPLE_STRIDE`]-th pixel) move each piece of `soup` to their median
 /// scale. A member that cannot be made is
 /// left out with a note in the report. `progress` gets the share of members done.
 fn fuse_members(
-    frame1: &Frame,
-    k: &Intrinsics,
-    (flow, reliable): (&FlowField, &Grid<bool>),
+    seen: Observed,
     params: &Params,
     labels: &Grid<u32>,
     soup: &mut Soup,
@@ -730,39 +741,26 @@ fn fuse_members(
         return None;
     }
     let counts = ensemble.member_counts(params.superpixels.count);
-    let (mut depths, mut failed) = (Vec::new(), Vec::new());
-    let sampled = |m: Solved| {
-        strided_depth(
-            &m.soup,
-            &m.segmentation.superpixels.labels,
-            k,
-            SAMPLE_STRIDE,
-        )
-    };
-    for (i, &count) in counts.iter().enumerate() {
-        progress(i as f32 / counts.len() as f32);
+    let member_depth = |count: usize| {
         let mut member = *params;
         member.superpixels.count = count;
         member.refine.iterations = ensemble.member_iterations;
         member.refine.particles = ensemble.member_particles;
-        let mut clock = Clock::start();
-        let solved = solve_soup(
-            frame1,
-            k,
-            flow,
-            reliable,
-            &member,
-            None,
-            &mut clock,
-            &mut Vec::new(),
-            &mut |_, _| {},
-        );
-        match solved {
-            Ok(m) => depths.push(sampled(m)),
+        let solved = solve_soup(seen, &member, None, &mut Clock::start(), &mut |_, _| {})?;
+        let labels = &solved.segmentation.superpixels.labels;
+        Ok(strided_depth(&solved.soup, labels, seen.k, SAMPLE_STRIDE))
+    };
+    let (mut depths, mut failed) = (Vec::new(), Vec::new());
+    for (count, depth) in counts
+        .iter()
+        .zip(solve_members(&counts, member_depth, progress))
+    {
+        match depth {
+            Ok(d) => depths.push(d),
             Err(e) => failed.push(format!("{count} superpixels: {e}")),
         }
     }
-    let own = strided_depth(soup, labels, k, SAMPLE_STRIDE);
+    let own = strided_depth(soup, labels, seen.k, SAMPLE_STRIDE);
     let sampled_labels = Grid::from_fn(own.width(), own.height(), |x, y| {
         *labels.get(x * SAMPLE_STRIDE, y * SAMPLE_STRIDE)
     });
@@ -772,6 +770,48 @@ fn fuse_members(
         failed,
         rescaled,
     })
+}
+
+/// `member(count)` for each of `counts`, in their order; `progress` gets the share done.
+/// Natively the members run on as many threads at once as the machine has cores (they are
+/// independent and deterministic, so the result does not depend on how many); in the browser,
+/// whose worker has one thread, one after the other.
+fn solve_members<F>(
+    counts: &[usize],
+    member: F,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<Result<Grid<f32>>>
+where
+    F: Fn(usize) -> Result<Grid<f32>> + Sync,
+{
+    #[cfg(not(target_arch = "wasm32"))]
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    #[cfg(target_arch = "wasm32")]
+    let threads = 1;
+    let mut out = Vec::with_capacity(counts.len());
+    for batch in counts.chunks(threads.max(1)) {
+        progress(out.len() as f32 / counts.len() as f32);
+        if batch.len() == 1 {
+            out.push(member(batch[0]));
+            continue;
+        }
+        #[cfg(not(target_arch = "wasm32"))]
+        std::thread::scope(|scope| {
+            let member = &member;
+            let running: Vec<_> = (batch.iter())
+                .map(|&count| scope.spawn(move || member(count)))
+                .collect();
+            for handle in running {
+                // A panic (a bug, never bad input) goes on as it would without the thread.
+                out.push(
+                    handle
+                        .join()
+                        .unwrap_or_else(|p| std::panic::resume_unwind(p)),
+                );
+            }
+        });
+    }
+    out
 }
 
 /// Flow by [`compute_flow`] with `params`, computed again with the next finer preset
@@ -832,22 +872,27 @@ fn trusted_flow(
     Ok((best, best_params))
 }
 
-/// Wall-clock lap timer that works natively and in the browser (where `Instant` is unavailable).
+/// Wall-clock lap timer of the stages, natively and in the browser (where `Instant` is
+/// unavailable).
 struct Clock {
     last: f64,
+    /// Milliseconds per finished stage, in the order they finished.
+    laps: Vec<(Stage, f64)>,
 }
 
 impl Clock {
     fn start() -> Self {
-        Clock { last: now_ms() }
+        Clock {
+            last: now_ms(),
+            laps: Vec::new(),
+        }
     }
 
-    /// Milliseconds since the previous lap.
-    fn lap(&mut self) -> f64 {
+    /// Records the milliseconds since the previous lap as `stage`'s.
+    fn lap(&mut self, stage: Stage) {
         let now = now_ms();
-        let elapsed = now - self.last;
+        self.laps.push((stage, now - self.last));
         self.last = now;
-        elapsed
     }
 }
 
@@ -870,6 +915,37 @@ fn now_ms() -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn members_come_back_in_the_order_of_their_counts_with_their_errors() {
+        // Natively the members run on several threads: whatever finishes first, each result
+        // stays with its count, an error stays an error, and progress only grows.
+        let counts = [1300, 1400, 1600, 1700, 1200, 1800, 1100];
+        let member = |count: usize| {
+            if count == 1600 {
+                return Err(Error::InvalidParameter("no member of 1600".into()));
+            }
+            // Slower for smaller counts, so later members tend to finish first.
+            std::thread::sleep(std::time::Duration::from_millis(
+                (2000 - count as u64) / 100,
+            ));
+            Ok(Grid::from_fn(3, 2, |x, y| (count + x + 10 * y) as f32))
+        };
+        let mut shares = Vec::new();
+        let out = solve_members(&counts, member, &mut |share| shares.push(share));
+        assert_eq!(out.len(), counts.len());
+        for (&count, result) in counts.iter().zip(&out) {
+            match result {
+                Ok(grid) => assert_eq!(*grid.get(2, 1), (count + 12) as f32),
+                Err(e) => {
+                    assert_eq!(count, 1600);
+                    assert!(e.to_string().contains("1600"));
+                }
+            }
+        }
+        assert!(!shares.is_empty() && shares[0] == 0.0);
+        assert!(shares.windows(2).all(|w| w[0] < w[1]) && shares.iter().all(|&s| s < 1.0));
+    }
 
     #[test]
     fn parameters_saved_without_newer_fields_keep_their_defaults() {
