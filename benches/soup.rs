@@ -1,6 +1,7 @@
 //! Timings of the soup stages (everything after flow and superpixels: motion hypotheses,
 //! assignment, planes, contact scales, refinement, fusion of the members, outputs) at 1024×436
-//! with exact flow, single thread. Run with `cargo bench --bench soup`.
+//! with exact flow, one thread except the fusion's members, which natively run on up to four
+//! threads (as many as there are cores). Run with `cargo bench --bench soup`.
 
 mod common;
 
@@ -16,7 +17,9 @@ use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::{FlowInput, Params, Stage, reconstruct};
 
 fn main() {
-    common::print_header("Soup stages after flow and superpixels, native release, one core");
+    common::print_header(
+        "Soup stages after flow and superpixels, native release, one core (fusion: up to four)",
+    );
     for kind in SceneKind::ALL {
         let Ok(s) = render(kind, 1024, 436) else {
             return;

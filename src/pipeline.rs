@@ -240,7 +240,8 @@ impl Reconstruction {
 /// the flow on; notes say what happened, and the stage times are summed over the passes).
 /// The kept pass is then fused with its members ([`Stage::Ensemble`], last: see
 /// [`crate::soup::ensemble`]), once, and its depth and confidence are made again from the fused
-/// soup.
+/// soup. Natively the members run on up to four threads (see `solve_members`); everything else
+/// runs on the calling thread.
 pub fn reconstruct(
     pair: &FramePair,
     flow: FlowInput,
@@ -724,11 +725,11 @@ fn solve_soup(
 
 /// Fuses members into `soup` (frame-1 labels `labels`) when `params.ensemble.members` is more
 /// than 1 (see [`crate::soup::ensemble`]): each member is [`solve_soup`] over what `seen` shows
-/// from one of
-/// [`EnsembleParams::member_counts`] superpixels, with the members' cheaper refinement; their
-/// depth maps (at every [`SAMPLE_STRIDE`]-th pixel) move each piece of `soup` to their median
-/// scale. A member that cannot be made is
-/// left out with a note in the report. `progress` gets the share of members done.
+/// from one of [`EnsembleParams::member_counts`] superpixels, with the members' cheaper
+/// refinement ([`solve_members`]: natively several at once); their depth maps (at every
+/// [`SAMPLE_STRIDE`]-th pixel) move each piece of `soup` to their median scale. A member that
+/// cannot be made is left out with a note in the report. `progress` gets the share of members
+/// done.
 fn fuse_members(
     seen: Observed,
     params: &Params,
@@ -772,10 +773,16 @@ fn fuse_members(
     })
 }
 
+/// At most this many members are made at once natively: each holds a whole reconstruction's
+/// segmentation, soups and refinement problem, so the memory grows with it. 4: the default
+/// number of members besides the kept reconstruction.
+#[cfg(not(target_arch = "wasm32"))]
+const MAX_MEMBER_THREADS: usize = 4;
+
 /// `member(count)` for each of `counts`, in their order; `progress` gets the share done.
-/// Natively the members run on as many threads at once as the machine has cores (they are
-/// independent and deterministic, so the result does not depend on how many); in the browser,
-/// whose worker has one thread, one after the other.
+/// Natively the members run on up to `MAX_MEMBER_THREADS` threads, no more than the machine
+/// has cores (they are independent and deterministic, so the results do not depend on how
+/// many); in the browser, whose worker has one thread, one after the other.
 fn solve_members<F>(
     counts: &[usize],
     member: F,
@@ -785,33 +792,81 @@ where
     F: Fn(usize) -> Result<Grid<f32>> + Sync,
 {
     #[cfg(not(target_arch = "wasm32"))]
-    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = std::thread::available_parallelism()
+        .map_or(1, |n| n.get())
+        .min(MAX_MEMBER_THREADS);
     #[cfg(target_arch = "wasm32")]
     let threads = 1;
-    let mut out = Vec::with_capacity(counts.len());
-    for batch in counts.chunks(threads.max(1)) {
-        progress(out.len() as f32 / counts.len() as f32);
-        if batch.len() == 1 {
-            out.push(member(batch[0]));
-            continue;
-        }
-        #[cfg(not(target_arch = "wasm32"))]
-        std::thread::scope(|scope| {
-            let member = &member;
-            let running: Vec<_> = (batch.iter())
-                .map(|&count| scope.spawn(move || member(count)))
-                .collect();
-            for handle in running {
-                // A panic (a bug, never bad input) goes on as it would without the thread.
-                out.push(
-                    handle
-                        .join()
-                        .unwrap_or_else(|p| std::panic::resume_unwind(p)),
-                );
-            }
-        });
+    solve_members_on(threads, counts, member, progress)
+}
+
+/// [`solve_members`] on `threads` threads (one: in turn, on the calling thread). `progress` gets
+/// the share of members done, from 0, as they finish.
+#[cfg_attr(target_arch = "wasm32", allow(unused_variables))]
+fn solve_members_on<F>(
+    threads: usize,
+    counts: &[usize],
+    member: F,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<Result<Grid<f32>>>
+where
+    F: Fn(usize) -> Result<Grid<f32>> + Sync,
+{
+    #[cfg(not(target_arch = "wasm32"))]
+    if threads > 1 && counts.len() > 1 {
+        return in_parallel(threads, counts, member, progress);
     }
-    out
+    let share = |done: usize| done as f32 / counts.len() as f32;
+    (counts.iter().enumerate())
+        .map(|(done, &count)| {
+            progress(share(done));
+            member(count)
+        })
+        .collect()
+}
+
+/// [`solve_members_on`] with more than one thread: each takes the next member not yet taken,
+/// and each result goes to its member's place, whichever finishes first. A panic (a bug, never
+/// bad input) goes on from here once every thread has stopped, as it would without threads.
+#[cfg(not(target_arch = "wasm32"))]
+fn in_parallel<F>(
+    threads: usize,
+    counts: &[usize],
+    member: F,
+    progress: &mut dyn FnMut(f32),
+) -> Vec<Result<Grid<f32>>>
+where
+    F: Fn(usize) -> Result<Grid<f32>> + Sync,
+{
+    use std::sync::atomic::{AtomicUsize, Ordering};
+    let n = counts.len();
+    let next = AtomicUsize::new(0);
+    let mut slots: Vec<Option<Result<Grid<f32>>>> = (0..n).map(|_| None).collect();
+    progress(0.0);
+    std::thread::scope(|scope| {
+        let (done_tx, done_rx) = std::sync::mpsc::channel();
+        for _ in 0..threads.min(n) {
+            let (done_tx, next, member) = (done_tx.clone(), &next, &member);
+            scope.spawn(move || {
+                loop {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i >= n || done_tx.send((i, member(counts[i]))).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        // The receiver ends when every thread has stopped (each holds a sender).
+        drop(done_tx);
+        for (done, (i, result)) in done_rx.iter().enumerate() {
+            slots[i] = Some(result);
+            if done + 1 < n {
+                progress((done + 1) as f32 / n as f32);
+            }
+        }
+    });
+    // Every slot is filled unless a thread panicked, and then the scope has panicked already.
+    slots.into_iter().flatten().collect()
 }
 
 /// Flow by [`compute_flow`] with `params`, computed again with the next finer preset
@@ -918,33 +973,32 @@ mod tests {
 
     #[test]
     fn members_come_back_in_the_order_of_their_counts_with_their_errors() {
-        // Natively the members run on several threads: whatever finishes first, each result
-        // stays with its count, an error stays an error, and progress only grows.
+        // Whatever finishes first, each result stays with its count, an error stays an error,
+        // and progress grows from 0 without reaching 1 (the fusion reports 1 once fused). Earlier
+        // members take longer, so on several threads later ones finish first.
         let counts = [1300, 1400, 1600, 1700, 1200, 1800, 1100];
         let member = |count: usize| {
+            let place = counts.iter().position(|&c| c == count).unwrap();
+            std::thread::sleep(std::time::Duration::from_millis(8 * (7 - place) as u64));
             if count == 1600 {
                 return Err(Error::InvalidParameter("no member of 1600".into()));
             }
-            // Slower for smaller counts, so later members tend to finish first.
-            std::thread::sleep(std::time::Duration::from_millis(
-                (2000 - count as u64) / 100,
-            ));
             Ok(Grid::from_fn(3, 2, |x, y| (count + x + 10 * y) as f32))
         };
-        let mut shares = Vec::new();
-        let out = solve_members(&counts, member, &mut |share| shares.push(share));
-        assert_eq!(out.len(), counts.len());
-        for (&count, result) in counts.iter().zip(&out) {
-            match result {
-                Ok(grid) => assert_eq!(*grid.get(2, 1), (count + 12) as f32),
-                Err(e) => {
-                    assert_eq!(count, 1600);
-                    assert!(e.to_string().contains("1600"));
+        for threads in [1, 2, 3, 8] {
+            let mut shares = Vec::new();
+            let out = solve_members_on(threads, &counts, member, &mut |share| shares.push(share));
+            assert_eq!(out.len(), counts.len(), "{threads} threads");
+            for (&count, result) in counts.iter().zip(&out) {
+                match result {
+                    Ok(grid) => assert_eq!(*grid.get(2, 1), (count + 12) as f32),
+                    Err(e) => assert!(count == 1600 && e.to_string().contains("1600")),
                 }
             }
+            assert_eq!(shares.len(), counts.len(), "{threads} threads: {shares:?}");
+            assert_eq!(shares[0], 0.0);
+            assert!(shares.windows(2).all(|w| w[0] < w[1]) && shares.iter().all(|&s| s < 1.0));
         }
-        assert!(!shares.is_empty() && shares[0] == 0.0);
-        assert!(shares.windows(2).all(|w| w[0] < w[1]) && shares.iter().all(|&s| s < 1.0));
     }
 
     #[test]
