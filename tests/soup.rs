@@ -456,7 +456,7 @@ fn a_reconstruction_that_pins_too_little_is_made_again_from_finer_flow() {
     use superpixel_soup::flow::{FlowParams, Preset};
     use superpixel_soup::pipeline::{Stage, pinned_share};
     // A small street: with preset fast's flow the scales of about 43 % of it are pinned, with
-    // medium's and high's about 97 % (none reaches 100 %).
+    // medium's and high's about 98 % (none reaches 100 %), before the fusion.
     let s = render(SceneKind::Street, 320, 136).unwrap();
     let pair = pair_of(&s.frame1, &s.frame2, s.intrinsics);
     let fast = FlowParams::preset(Preset::Fast);
@@ -478,22 +478,21 @@ fn a_reconstruction_that_pins_too_little_is_made_again_from_finer_flow() {
         last = Some(stage);
     })
     .unwrap();
-    let singles: Vec<Reconstruction> = Preset::ALL
-        .into_iter()
-        .map(|preset| {
-            reconstruct(
-                &pair,
-                FlowInput::Compute(FlowParams::preset(preset)),
-                &params(0.0),
-                &mut |_, _| {},
-            )
-            .unwrap()
-        })
+    // One pass of each preset, fused (`members` at the default) or not (1): the pipeline weighs
+    // each pass before the fusion, so the unfused ones give the shares it compares.
+    let single = |preset, members| {
+        let mut p = params(0.0);
+        p.ensemble.members = members;
+        let flow = FlowInput::Compute(FlowParams::preset(preset));
+        reconstruct(&pair, flow, &p, &mut |_, _| {}).unwrap()
+    };
+    let shares: Vec<f64> = (Preset::ALL.into_iter())
+        .map(|preset| pinned_share(&single(preset, 1)))
         .collect();
-    let shares: Vec<f64> = singles.iter().map(pinned_share).collect();
     let best = assert_kept_the_best(&always, &shares);
     assert_eq!(flow_starts, if best == 2 { 3 } else { 4 });
-    assert!((pinned_share(&always) - shares[best]).abs() < 1e-12);
+    let kept = single(Preset::ALL[best], Params::default().ensemble.members);
+    assert!((pinned_share(&always) - pinned_share(&kept)).abs() < 1e-12);
     let notes = &always.report.notes;
     assert!(
         notes[0].contains("with the flow of preset fast; reconstructed again with preset medium"),
@@ -512,7 +511,7 @@ fn a_reconstruction_that_pins_too_little_is_made_again_from_finer_flow() {
             .map(|z| z.to_bits())
             .collect::<Vec<_>>()
     };
-    assert_eq!(bits(&always), bits(&singles[best]));
+    assert_eq!(bits(&always), bits(&kept));
     // The stage timings are the sums over the passes, one entry per stage.
     let stages: Vec<Stage> = always.report.timings_ms.iter().map(|t| t.0).collect();
     assert_eq!(stages, Stage::ALL.to_vec());
@@ -723,4 +722,19 @@ fn the_crowd_s_walkers_stand_on_the_floor_where_they_rest_on_it() {
     // End to end.
     let m = depth_metrics(&s.depth1, &rec.depth_input).unwrap();
     assert!(m.mre < 0.16, "crowd: MRE {}", m.mre);
+}
+
+#[test]
+fn the_table_s_objects_stand_on_it_where_the_floor_lies_in_front_of_their_bottom_edge() {
+    // Computed flow, the defaults. Below an object standing on the table top, the table top
+    // runs towards the camera, in front of the object's bottom edge; the figure prior (a small
+    // mover lies in front of the world it is seen against) charged the truth there and held
+    // the box that slides on the table 1.5× too near (MRE 0.042 at 1500 superpixels; 0.024
+    // with the figure prior lifted at such edges where the floor runs to the near edge of the
+    // view, 0.023–0.037 over 1300–1700; the box within 4 % by its median).
+    let s = render(SceneKind::Table, 1024, 436).unwrap();
+    let flow = superpixel_soup::flow::FlowParams::default();
+    let rec = reconstruct_scene(&s, FlowInput::Compute(flow), &Params::default());
+    let m = depth_metrics(&s.depth1, &rec.depth_input).unwrap();
+    assert!(m.mre < 0.033, "table: MRE {}", m.mre);
 }

@@ -57,7 +57,10 @@
 //!    ego-motion, mostly of pieces whose parallax measures their depth: `measured_share`), since
 //!    a walker splits the background behind it into fragments smaller than itself. At the
 //!    crowd's truth it charged such fragments 18–35 contact units, and the solve placed whole
-//!    walkers 2–4× wrong to spare them. A weak *static prior* (`static_weight`) ties every
+//!    walkers 2–4× wrong to spare them. Nor does it act across a mover's bottom edge over the
+//!    static world where things stand on a floor (the ground runs to the near edge of the view):
+//!    below a standing thing the floor runs towards the camera, in front of it. A weak
+//!    *static prior* (`static_weight`) ties every
 //!    segment on the ego-motion to the static world's scale instead: the ego-motion explains
 //!    its flow at exactly that scale. A *ground prior* (`ground_weight`) charges every piece
 //!    outside the static world one broken contact for lying more than σ under its ground. A
@@ -84,7 +87,7 @@ use crate::grid::Grid;
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
 use crate::numeric::{atanh, cos, exp, hypot, ln, min, tanh};
 use crate::superpixels::Superpixels;
-use crate::superpixels::graph::BoundaryGraph;
+use crate::superpixels::graph::{BoundaryEdge, BoundaryGraph};
 
 /// Settings of the scale solve. Each value is scale-free and shared by every scene.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
@@ -130,7 +133,9 @@ pub struct ScaleParams {
     /// larger one is usually in front of it (a mover against the world); behind, it would be
     /// seen through a hole. Two frames often leave a mover's scale free once its contacts
     /// break, and then this decides; 10 makes lying behind dearer than any contact the move
-    /// could make.
+    /// could make. It does not act across a mover's bottom edge over the static world where the
+    /// ground runs to the near edge of the view (`rest_bottom_share`): below a standing thing
+    /// the floor lies in front of it (on the table it held a sliding box 1.5× too near).
     pub behind_weight: f64,
     /// A boundary's flow counts as continuous (its median jump below `continuous_flow_px`)
     /// only where at least this share of its pixel pairs pass the forward–backward check.
@@ -280,6 +285,11 @@ pub struct Link {
     pub flow_jump: f64,
     /// Share of the boundary's pixel pairs whose flow both pass the forward–backward check.
     pub trusted_share: f64,
+    /// The piece (a or b) whose pixels lie directly above the other's on at least
+    /// [`ground::MIN_RESTING_PIXELS`] of the boundary's pixel pairs (the one with more such
+    /// pairs; `None` on a tie): where things stand on a floor, the piece below it may be floor
+    /// in front of it (see `segment_pair_terms`).
+    pub upper: Option<usize>,
 }
 
 impl Link {
@@ -567,7 +577,9 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
             .iter()
             .filter(|&&(p, q)| reliable.data()[p as usize] && reliable.data()[q as usize])
             .count();
+        let width = inputs.superpixels.labels.width();
         links.push(Link {
+            upper: upper_piece(edge, width),
             a,
             b,
             terms,
@@ -586,6 +598,25 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
         links,
         touching,
         sigma: params.sigma,
+    }
+}
+
+/// The piece of `edge` whose pixels lie directly above the other's (one row up, in an image
+/// `width` pixels wide) on at least [`ground::MIN_RESTING_PIXELS`] of its pixel pairs (the one
+/// with more such pairs; `None` on a tie), see [`Link::upper`].
+fn upper_piece(edge: &BoundaryEdge, width: usize) -> Option<usize> {
+    let (mut a_over_b, mut b_over_a) = (0, 0);
+    for &(p, q) in &edge.pairs {
+        let (p, q) = (p as usize, q as usize);
+        a_over_b += usize::from(q == p + width);
+        b_over_a += usize::from(p == q + width);
+    }
+    if a_over_b.max(b_over_a) < ground::MIN_RESTING_PIXELS || a_over_b == b_over_a {
+        None
+    } else if a_over_b > b_over_a {
+        Some(edge.a as usize)
+    } else {
+        Some(edge.b as usize)
     }
 }
 
@@ -667,6 +698,10 @@ struct Segments {
     /// the rest prior is off or the ground does not reach the bottom of the view
     /// ([`ScaleParams::rest_bottom_share`]).
     resting: Vec<Vec<f64>>,
+    /// Whether the static world's ground runs to the near edge of the view
+    /// ([`ScaleParams::rest_bottom_share`]): a floor that things stand on, so the world below a
+    /// mover's bottom edge may be floor in front of it (see `segment_pair_terms`).
+    floor: bool,
 }
 
 /// The static world's segment: the largest on the ego-motion (the earlier one on a tie).
@@ -717,29 +752,44 @@ fn depths_below(
         .collect()
 }
 
-/// Per piece on a motion of its own, where it rests on `plane` (see `Segments::resting`): the
-/// log-depth gaps of its resting pixels ([`ground::resting_gaps`]). All empty without a plane,
-/// with a zero [`ScaleParams::rest_weight`], or where the ground covers less than
-/// [`ScaleParams::rest_bottom_share`] of the view's bottom rows.
-fn resting_on(
+/// Whether `plane`, the static world's ground, covers at least
+/// [`ScaleParams::rest_bottom_share`] of the view's bottom rows ([`ground::bottom_share`]): a
+/// floor that things stand on runs to the near edge of the view (see `Segments::floor`).
+fn floor_in_view(
     soup: &Soup,
     inputs: &ScaleInputs,
     world_piece: &[bool],
     plane: Option<&Vector3<f64>>,
     params: &ScaleParams,
+) -> bool {
+    plane.is_some_and(|m| {
+        ground::bottom_share(soup, inputs.superpixels, inputs.intrinsics, m, world_piece)
+            >= params.rest_bottom_share
+    })
+}
+
+/// Per piece on a motion of its own, where it rests on `plane` (see `Segments::resting`): the
+/// log-depth gaps of its resting pixels ([`ground::resting_gaps`]). All empty without a plane,
+/// with a zero [`ScaleParams::rest_weight`], or without a `floor` ([`floor_in_view`]).
+fn resting_on(
+    soup: &Soup,
+    inputs: &ScaleInputs,
+    world_piece: &[bool],
+    plane: Option<&Vector3<f64>>,
+    floor: bool,
+    params: &ScaleParams,
 ) -> Vec<Vec<f64>> {
-    let (superpixels, intrinsics) = (inputs.superpixels, inputs.intrinsics);
-    let rests = |m: &Vector3<f64>| {
-        params.rest_weight > 0.0
-            && ground::bottom_share(soup, superpixels, intrinsics, m, world_piece)
-                >= params.rest_bottom_share
-    };
-    let plane = plane.filter(|m| rests(m));
+    let plane = plane.filter(|_| floor && params.rest_weight > 0.0);
     (0..soup.pieces.len())
         .map(|i| match plane {
-            Some(m) if soup.pieces[i].hypothesis != 0 => {
-                ground::resting_gaps(soup, superpixels, intrinsics, m, world_piece, i)
-            }
+            Some(m) if soup.pieces[i].hypothesis != 0 => ground::resting_gaps(
+                soup,
+                inputs.superpixels,
+                inputs.intrinsics,
+                m,
+                world_piece,
+                i,
+            ),
             _ => Vec::new(),
         })
         .collect()
@@ -760,7 +810,8 @@ impl Segments {
         let world_piece = world_pieces(soup, inputs, params.world_parallax);
         let plane = world_ground(soup, inputs, &world_piece, params);
         let below = depths_below(soup, inputs, plane.as_ref());
-        let resting = resting_on(soup, inputs, &world_piece, plane.as_ref(), params);
+        let floor = floor_in_view(soup, inputs, &world_piece, plane.as_ref(), params);
+        let resting = resting_on(soup, inputs, &world_piece, plane.as_ref(), floor, params);
         let labels = &inputs.superpixels.labels;
         let (width, height) = (labels.width() as u32, labels.height() as u32);
         let sunk: Vec<bool> = (soup.pieces.iter().zip(&below))
@@ -794,6 +845,7 @@ impl Segments {
             world,
             below,
             resting,
+            floor,
         }
     }
 
@@ -970,7 +1022,9 @@ fn resting_at_scales(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
         piece.lambda = 1.0;
     }
     let plane = world_ground(&absolute, inputs, &world, params);
-    resting_on(&absolute, inputs, &world, plane.as_ref(), params)
+    let floor = params.rest_weight > 0.0
+        && floor_in_view(&absolute, inputs, &world, plane.as_ref(), params);
+    resting_on(&absolute, inputs, &world, plane.as_ref(), floor, params)
 }
 
 /// Sets every piece's λ = e^(s_i), normalised so the median λ is 1.
@@ -1189,7 +1243,11 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
         // it. Across continuous trusted flow nothing occludes anything.
         let g_is_figure = is_figure(sizes, g, h);
         let figure = if g_is_figure { g } else { h };
-        if kappa <= 0.0 || segments.measured[figure] || l.shows_continuity(params) {
+        if kappa <= 0.0
+            || segments.measured[figure]
+            || l.shows_continuity(params)
+            || stands_over_world(segments, l, figure)
+        {
             continue;
         }
         let mut gaps: Vec<(f64, f64)> = l.frame1_seen_from(ga == g, other).collect();
@@ -1212,6 +1270,23 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
         pair.terms.sort_by(|a, b| a.1.total_cmp(&b.1));
     }
     pairs
+}
+
+/// Whether link `l` is the bottom edge of figure segment `figure` over the static world where
+/// things stand on a floor ([`Segments::floor`]): the figure's piece lies directly above the
+/// world's there ([`Link::upper`]). Below a standing thing the floor runs towards the camera,
+/// in front of it, so lying behind the world there is no sign of a hole; and the floor pieces
+/// at its feet mix floor with feet, their planes nearer still (at the crowd's truth they put a
+/// walker 0.3–0.6 in log-depth behind them, and the prior charged the truth 0.54). The ground
+/// prior still keeps the figure from sinking under the ground, and the rest prior ties it to the
+/// ground it rests on.
+fn stands_over_world(segments: &Segments, l: &Link, figure: usize) -> bool {
+    let (piece, other) = if segments.segment[l.a] == figure {
+        (l.a, l.b)
+    } else {
+        (l.b, l.a)
+    };
+    segments.floor && l.upper == Some(piece) && Some(segments.segment[other]) == segments.world
 }
 
 /// The ground prior: every piece outside the ground's segment whose rays meet the ground pays
@@ -1911,6 +1986,7 @@ mod tests {
             median_c1: c,
             flow_jump: 2.0,
             trusted_share: 1.0,
+            upper: None,
         }
     }
 
@@ -1929,6 +2005,7 @@ mod tests {
             world,
             below: vec![None; segment.len()],
             resting: vec![Vec::new(); segment.len()],
+            floor: false,
         }
     }
 
@@ -2041,6 +2118,77 @@ mod tests {
         let solve = |behind_weight| place_loose_mover(link(3, 1, 0.45, 0.3), behind_weight);
         assert!((solve(0.0) - 1.0).abs() < 1e-9, "{}", solve(0.0));
         assert!((solve(1.0) + 0.3).abs() < 1e-9, "{}", solve(1.0));
+    }
+
+    #[test]
+    fn the_figure_prior_does_not_act_across_a_mover_s_bottom_edge_over_a_floor() {
+        // The loose mover (piece 3) stands over world piece 1: its pixels lie directly above
+        // piece 1's, where the floor runs towards the camera in front of it. With a floor in
+        // view nothing there says the mover should be in front, and contacts park it 1 behind
+        // as without the prior. Without a floor in view, or where the world piece lies above
+        // the mover (it hangs below the world: a hole is what would show it), the prior holds
+        // the mover in front.
+        let placement = |upper: Option<usize>, floor: bool| {
+            let problem = Problem {
+                links: vec![
+                    link(0, 1, 1.0, 0.0),
+                    link(1, 2, 1.0, 0.0),
+                    link(3, 0, 0.5, -1.0),
+                    Link {
+                        upper,
+                        ..link(3, 1, 0.45, 0.3)
+                    },
+                ],
+                touching: vec![vec![0, 2], vec![0, 1, 3], vec![1], vec![2, 3]],
+                sigma: 0.1,
+            };
+            let mut segments = segments_of(&[0, 0, 0, 1], &[0.0, 0.0], &[true, false]);
+            segments.floor = floor;
+            let params = ScaleParams {
+                behind_weight: 1.0,
+                ..ScaleParams::default()
+            };
+            solve_segments(&problem, &segments, &params, None).0[1]
+        };
+        let standing = placement(Some(3), true);
+        assert!((standing - 1.0).abs() < 1e-9, "{standing}");
+        for (upper, floor) in [(Some(3), false), (Some(1), true), (None, true)] {
+            let held = placement(upper, floor);
+            assert!((held + 0.3).abs() < 1e-9, "{upper:?} {floor}: {held}");
+        }
+    }
+
+    #[test]
+    fn the_upper_piece_of_a_boundary_is_the_one_above_on_enough_pairs() {
+        // An image 10 pixels wide: pairs (p, q) with q one row below p put a above b.
+        let width = 10;
+        let edge = |pairs: Vec<(u32, u32)>| BoundaryEdge {
+            a: 4,
+            b: 7,
+            colour_diff: vec![0.0; pairs.len()],
+            pairs,
+        };
+        let below = |p: u32| (p, p + width as u32);
+        let beside = |p: u32| (p, p + 1);
+        let above = |p: u32| (p + width as u32, p);
+        let a_on_b = edge(vec![below(21), below(22), below(23), beside(24), above(5)]);
+        assert_eq!(upper_piece(&a_on_b, width), Some(4));
+        let b_on_a = edge(vec![above(21), above(22), above(23), above(24), below(5)]);
+        assert_eq!(upper_piece(&b_on_a, width), Some(7));
+        // Too few pairs one above the other, or as many each way: no upper piece.
+        assert_eq!(
+            upper_piece(&edge(vec![below(21), below(22), beside(23)]), width),
+            None
+        );
+        let even = edge(vec![
+            below(21),
+            below(22),
+            below(23),
+            above(31),
+            above(32),
+            above(33),
+        ]);
+        assert_eq!(upper_piece(&even, width), None);
     }
 
     #[test]
