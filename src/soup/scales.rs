@@ -202,6 +202,8 @@ pub struct ScaleParams {
     /// 0.45–0.49, where the floor under a flying object put it 3–5.5× too far). 0.65: at 0.6,
     /// 20 % less let FlyingThings3D's members through (+0.11); here 0.52–0.78 move no case by
     /// more than 0.002 (the street and road lose the prior at 0.78, which changes them little).
+    /// The same test lifts the figure prior across a thing's bottom edge over the floor
+    /// (`behind_weight`), whatever `rest_weight` is.
     pub rest_bottom_share: f64,
     /// Flow jump (px) across a boundary below which the flow counts as continuous there, where
     /// enough of it is trusted (`continuity_trusted_share`): a depth edge needs a flow edge to
@@ -535,6 +537,7 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
         ..
     } = *inputs;
     let unit = |p: &Piece| Piece { lambda: 1.0, ..*p };
+    let width = inputs.superpixels.labels.width();
     let mut links = Vec::new();
     for edge in boundaries.edges.iter().filter(|e| !e.pairs.is_empty()) {
         let (a, b) = (edge.a as usize, edge.b as usize);
@@ -577,7 +580,6 @@ pub fn build_problem(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
             .iter()
             .filter(|&&(p, q)| reliable.data()[p as usize] && reliable.data()[q as usize])
             .count();
-        let width = inputs.superpixels.labels.width();
         links.push(Link {
             upper: upper_piece(edge, width),
             a,
@@ -1022,8 +1024,7 @@ fn resting_at_scales(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) ->
         piece.lambda = 1.0;
     }
     let plane = world_ground(&absolute, inputs, &world, params);
-    let floor = params.rest_weight > 0.0
-        && floor_in_view(&absolute, inputs, &world, plane.as_ref(), params);
+    let floor = floor_in_view(&absolute, inputs, &world, plane.as_ref(), params);
     resting_on(&absolute, inputs, &world, plane.as_ref(), floor, params)
 }
 
@@ -1272,21 +1273,25 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
     pairs
 }
 
-/// Whether link `l` is the bottom edge of figure segment `figure` over the static world where
-/// things stand on a floor ([`Segments::floor`]): the figure's piece lies directly above the
-/// world's there ([`Link::upper`]). Below a standing thing the floor runs towards the camera,
-/// in front of it, so lying behind the world there is no sign of a hole; and the floor pieces
-/// at its feet mix floor with feet, their planes nearer still (at the crowd's truth they put a
-/// walker 0.3–0.6 in log-depth behind them, and the prior charged the truth 0.54). The ground
-/// prior still keeps the figure from sinking under the ground, and the rest prior ties it to the
-/// ground it rests on.
+/// Whether link `l` is the bottom edge of the figure segment `figure` (the smaller one) over the
+/// static world below the horizon, where things stand on a floor ([`Segments::floor`]): the
+/// figure's piece lies directly above the world's there ([`Link::upper`]), and the world
+/// piece's rays meet the ground ([`Segments::below`]). Below a standing thing the floor runs
+/// towards the camera, in front of it, so lying behind the world there is no sign of a hole;
+/// and the floor pieces at its feet mix floor with feet, their planes nearer still (at the
+/// crowd's truth they put a walker 0.1–0.6 in log-depth behind them, and the prior charged the
+/// truth 0.54 there). The ground prior still keeps the figure from sinking under the ground,
+/// and the rest prior ties a mover to the ground it rests on.
 fn stands_over_world(segments: &Segments, l: &Link, figure: usize) -> bool {
     let (piece, other) = if segments.segment[l.a] == figure {
         (l.a, l.b)
     } else {
         (l.b, l.a)
     };
-    segments.floor && l.upper == Some(piece) && Some(segments.segment[other]) == segments.world
+    segments.floor
+        && l.upper == Some(piece)
+        && Some(segments.segment[other]) == segments.world
+        && segments.below[other].is_some()
 }
 
 /// The ground prior: every piece outside the ground's segment whose rays meet the ground pays
@@ -2125,10 +2130,15 @@ mod tests {
         // The loose mover (piece 3) stands over world piece 1: its pixels lie directly above
         // piece 1's, where the floor runs towards the camera in front of it. With a floor in
         // view nothing there says the mover should be in front, and contacts park it 1 behind
-        // as without the prior. Without a floor in view, or where the world piece lies above
-        // the mover (it hangs below the world: a hole is what would show it), the prior holds
-        // the mover in front.
-        let placement = |upper: Option<usize>, floor: bool| {
+        // as without the prior. Without a floor in view, where the world piece lies above the
+        // mover (it hangs below the world: a hole is what would show it), or where the world
+        // piece is above the horizon (no floor there), the prior holds the mover in front.
+        let placement = |mover_first: bool, upper: Option<usize>, floor: bool, horizon: bool| {
+            let (a, b, c) = if mover_first {
+                (3, 1, 0.3)
+            } else {
+                (1, 3, -0.3)
+            };
             let problem = Problem {
                 links: vec![
                     link(0, 1, 1.0, 0.0),
@@ -2136,7 +2146,7 @@ mod tests {
                     link(3, 0, 0.5, -1.0),
                     Link {
                         upper,
-                        ..link(3, 1, 0.45, 0.3)
+                        ..link(a, b, 0.45, c)
                     },
                 ],
                 touching: vec![vec![0, 2], vec![0, 1, 3], vec![1], vec![2, 3]],
@@ -2144,17 +2154,29 @@ mod tests {
             };
             let mut segments = segments_of(&[0, 0, 0, 1], &[0.0, 0.0], &[true, false]);
             segments.floor = floor;
+            // Piece 1's rays meet the ground unless it lies above the horizon.
+            segments.below[1] = (!horizon).then_some(-0.5);
             let params = ScaleParams {
                 behind_weight: 1.0,
                 ..ScaleParams::default()
             };
             solve_segments(&problem, &segments, &params, None).0[1]
         };
-        let standing = placement(Some(3), true);
-        assert!((standing - 1.0).abs() < 1e-9, "{standing}");
-        for (upper, floor) in [(Some(3), false), (Some(1), true), (None, true)] {
-            let held = placement(upper, floor);
-            assert!((held + 0.3).abs() < 1e-9, "{upper:?} {floor}: {held}");
+        for mover_first in [true, false] {
+            let standing = placement(mover_first, Some(3), true, false);
+            assert!((standing - 1.0).abs() < 1e-9, "{mover_first}: {standing}");
+            for (upper, floor, horizon) in [
+                (Some(3), false, false),
+                (Some(1), true, false),
+                (None, true, false),
+                (Some(3), true, true),
+            ] {
+                let held = placement(mover_first, upper, floor, horizon);
+                assert!(
+                    (held + 0.3).abs() < 1e-9,
+                    "{mover_first} {upper:?} {floor} {horizon}: {held}"
+                );
+            }
         }
     }
 
