@@ -751,11 +751,9 @@ fn fuse_members(
         let labels = &solved.segmentation.superpixels.labels;
         Ok(strided_depth(&solved.soup, labels, seen.k, SAMPLE_STRIDE))
     };
+    let made = solve_members(member_threads(), &counts, member_depth, progress);
     let (mut depths, mut failed) = (Vec::new(), Vec::new());
-    for (count, depth) in counts
-        .iter()
-        .zip(solve_members(&counts, member_depth, progress))
-    {
+    for (count, depth) in counts.iter().zip(made) {
         match depth {
             Ok(d) => depths.push(d),
             Err(e) => failed.push(format!("{count} superpixels: {e}")),
@@ -779,31 +777,24 @@ fn fuse_members(
 #[cfg(not(target_arch = "wasm32"))]
 const MAX_MEMBER_THREADS: usize = 4;
 
-/// `member(count)` for each of `counts`, in their order; `progress` gets the share done.
-/// Natively the members run on up to `MAX_MEMBER_THREADS` threads, no more than the machine
-/// has cores (they are independent and deterministic, so the results do not depend on how
-/// many); in the browser, whose worker has one thread, one after the other.
-fn solve_members<F>(
-    counts: &[usize],
-    member: F,
-    progress: &mut dyn FnMut(f32),
-) -> Vec<Result<Grid<f32>>>
-where
-    F: Fn(usize) -> Result<Grid<f32>> + Sync,
-{
+/// How many members are made at once: natively up to `MAX_MEMBER_THREADS`, no more than the
+/// machine has cores; in the browser, whose worker has one thread, one.
+fn member_threads() -> usize {
     #[cfg(not(target_arch = "wasm32"))]
     let threads = std::thread::available_parallelism()
         .map_or(1, |n| n.get())
         .min(MAX_MEMBER_THREADS);
     #[cfg(target_arch = "wasm32")]
     let threads = 1;
-    solve_members_on(threads, counts, member, progress)
+    threads
 }
 
-/// [`solve_members`] on `threads` threads (one: in turn, on the calling thread). `progress` gets
+/// `member(count)` for each of `counts`, in their order, on `threads` threads
+/// ([`member_threads`]; one: in turn, on the calling thread). The members are independent and
+/// deterministic, so the results do not depend on how many threads run them. `progress` gets
 /// the share of members done, from 0, as they finish.
 #[cfg_attr(target_arch = "wasm32", allow(unused_variables))]
-fn solve_members_on<F>(
+fn solve_members<F>(
     threads: usize,
     counts: &[usize],
     member: F,
@@ -825,7 +816,7 @@ where
         .collect()
 }
 
-/// [`solve_members_on`] with more than one thread: each takes the next member not yet taken,
+/// [`solve_members`] with more than one thread: each takes the next member not yet taken,
 /// and each result goes to its member's place, whichever finishes first. A panic (a bug, never
 /// bad input) goes on from here once every thread has stopped, as it would without threads.
 #[cfg(not(target_arch = "wasm32"))]
@@ -987,7 +978,7 @@ mod tests {
         };
         for threads in [1, 2, 3, 8] {
             let mut shares = Vec::new();
-            let out = solve_members_on(threads, &counts, member, &mut |share| shares.push(share));
+            let out = solve_members(threads, &counts, member, &mut |share| shares.push(share));
             assert_eq!(out.len(), counts.len(), "{threads} threads");
             for (&count, result) in counts.iter().zip(&out) {
                 match result {

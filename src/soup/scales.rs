@@ -58,9 +58,9 @@
 //!    a walker splits the background behind it into fragments smaller than itself. At the
 //!    crowd's truth it charged such fragments 18–35 contact units, and the solve placed whole
 //!    walkers 2–4× wrong to spare them. Nor does it act across a mover's bottom edge over the
-//!    static world where things stand on a floor (the ground runs to the near edge of the view):
-//!    below a standing thing the floor runs towards the camera, in front of it. A weak
-//!    *static prior* (`static_weight`) ties every
+//!    static world below the horizon where things stand on a floor (the ground runs to the near
+//!    edge of the view): below a standing thing the floor runs towards the camera, in front of
+//!    it. A weak *static prior* (`static_weight`) ties every
 //!    segment on the ego-motion to the static world's scale instead: the ego-motion explains
 //!    its flow at exactly that scale. A *ground prior* (`ground_weight`) charges every piece
 //!    outside the static world one broken contact for lying more than σ under its ground. A
@@ -133,9 +133,10 @@ pub struct ScaleParams {
     /// larger one is usually in front of it (a mover against the world); behind, it would be
     /// seen through a hole. Two frames often leave a mover's scale free once its contacts
     /// break, and then this decides; 10 makes lying behind dearer than any contact the move
-    /// could make. It does not act across a mover's bottom edge over the static world where the
-    /// ground runs to the near edge of the view (`rest_bottom_share`): below a standing thing
-    /// the floor lies in front of it (on the table it held a sliding box 1.5× too near).
+    /// could make. It does not act across a mover's bottom edge over the static world below the
+    /// horizon where the ground runs to the near edge of the view (`rest_bottom_share`): below a
+    /// standing thing the floor lies in front of it (on the table it held a sliding box 1.5×
+    /// too near).
     pub behind_weight: f64,
     /// A boundary's flow counts as continuous (its median jump below `continuous_flow_px`)
     /// only where at least this share of its pixel pairs pass the forward–backward check.
