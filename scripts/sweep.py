@@ -24,8 +24,9 @@ SOUP = os.path.join(os.environ.get("CARGO_TARGET_DIR", os.path.join(ROOT, "targe
 SKIP = {"seed"}
 
 
-def evaluate(cases, params, gt_flow):
-    """MRE per case for the given parameter overrides (a nested dict)."""
+def evaluate(cases, params, gt_flow, extra=()):
+    """MRE per case for the given parameter overrides (a nested dict); `extra` are more options
+    of `soup eval` (for example `--preset medium`)."""
     with tempfile.TemporaryDirectory() as tmp:
         params_file = os.path.join(tmp, "params.json")
         out_file = os.path.join(tmp, "out.json")
@@ -34,6 +35,7 @@ def evaluate(cases, params, gt_flow):
         cmd = [SOUP, "eval", *cases, "--params", params_file, "--json", out_file]
         if gt_flow:
             cmd.append("--gt-flow")
+        cmd.extend(extra)
         subprocess.run(cmd, check=True, stdout=subprocess.DEVNULL)
         with open(out_file) as f:
             return {r["case"]: r["metrics"]["mre"] for r in json.load(f)}
