@@ -20,18 +20,7 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sweep import evaluate  # noqa: E402
-
-
-def merged(base, overrides):
-    """`base` with the nested dict `overrides` merged into it (a new dict)."""
-    out = dict(base)
-    for key, value in overrides.items():
-        if isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = merged(out[key], value)
-        else:
-            out[key] = value
-    return out
+from sweep import evaluate_seeds  # noqa: E402
 
 
 def main():
@@ -61,11 +50,7 @@ def main():
     if params_file:
         with open(params_file) as f:
             base = json.load(f)
-    results = [evaluate(cases, base, gt_flow, extra)]
-    for seed in range(1, runs):
-        seeds = {"init": {"seed": seed}, "refine": {"seed": seed}}
-        results.append(evaluate(cases, merged(base, seeds), gt_flow, extra))
-        print(f"seed {seed} done", file=sys.stderr)
+    results = evaluate_seeds(cases, base, gt_flow, runs, extra)
     print(f"| case | default seeds | mean over {runs} seeds | smallest | largest |")
     print("| --- | --- | --- | --- | --- |")
     table = {}

@@ -4,8 +4,12 @@ refinement and the fusion (`ensemble`) is moved by -20 % and +20 % in turn (one 
 each evaluation case is compared with the MRE at the defaults. Prints a Markdown table: per
 parameter, the largest change of any case's MRE and the case it happened on.
 
-Usage: scripts/sweep.py CASE_DIR... [--gt-flow] [--only NAME,...]
+Usage: scripts/sweep.py CASE_DIR... [--gt-flow] [--only NAME,...] [--seeds N]
   (needs a release build: cargo build --release --bin soup)
+
+With --seeds N every setting is evaluated at the default seeds and at seeds 1 .. N-1 (see
+scripts/seeds.py) and compared by its mean MRE per case: where one seed is one draw, a change
+measured at the default seeds alone mostly measures which draw it lands on.
 
 Cases are evaluation folders: the synthetic scenes of `soup synth` and, when present, the public
 cases in ../shared/eval/. Each run of `soup eval` takes the cases' time (seconds per case), so a
@@ -41,6 +45,34 @@ def evaluate(cases, params, gt_flow, extra=()):
             return {r["case"]: r["metrics"]["mre"] for r in json.load(f)}
 
 
+def merged(base, overrides):
+    """`base` with the nested dict `overrides` merged into it (a new dict)."""
+    out = dict(base)
+    for key, value in overrides.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merged(out[key], value)
+        else:
+            out[key] = value
+    return out
+
+
+def evaluate_seeds(cases, params, gt_flow, runs, extra=()):
+    """[`evaluate`] at the default seeds and at seeds 1 .. runs-1 (`init.seed` and
+    `refine.seed` set to the same value): the list of the runs' MRE per case."""
+    results = [evaluate(cases, params, gt_flow, extra)]
+    for seed in range(1, runs):
+        seeds = {"init": {"seed": seed}, "refine": {"seed": seed}}
+        results.append(evaluate(cases, merged(params, seeds), gt_flow, extra))
+        print(f"seed {seed} done", file=sys.stderr)
+    return results
+
+
+def evaluate_mean(cases, params, gt_flow, runs):
+    """The mean MRE per case over `runs` seeds ([`evaluate_seeds`]); one run is [`evaluate`]."""
+    results = evaluate_seeds(cases, params, gt_flow, runs)
+    return {case: sum(r[case] for r in results) / len(results) for case in results[0]}
+
+
 def defaults():
     """The library's defaults, as `soup reconstruct --help` prints them."""
     text = subprocess.run([SOUP, "reconstruct", "--help"], check=True, capture_output=True, text=True).stdout
@@ -54,11 +86,17 @@ def main():
     if "--only" in args:
         only = set(args[args.index("--only") + 1].split(","))
         del args[args.index("--only"): args.index("--only") + 2]
+    runs = 1
+    if "--seeds" in args:
+        runs = int(args[args.index("--seeds") + 1])
+        del args[args.index("--seeds"): args.index("--seeds") + 2]
     cases = [a for a in args if not a.startswith("--")]
-    if not cases:
+    if not cases or runs < 1:
         sys.exit(__doc__)
     params = defaults()
-    base = evaluate(cases, {}, gt_flow)
+    base = evaluate_mean(cases, {}, gt_flow, runs)
+    if runs > 1:
+        print(f"means over {runs} seeds")
     print("defaults: " + ", ".join(f"{c} {m:.4f}" for c, m in base.items()))
     print()
     print("| parameter | default | −20 % | +20 % | largest MRE change | on case |")
@@ -76,7 +114,7 @@ def main():
                 if isinstance(value, int):
                     v = max(1, round(v)) if value > 0 else 0
                 values.append(v)
-                mre = evaluate(cases, {group: {name: v}}, gt_flow)
+                mre = evaluate_mean(cases, {group: {name: v}}, gt_flow, runs)
                 for case, m in mre.items():
                     if abs(m - base[case]) > abs(worst[0]):
                         worst = (m - base[case], case)
