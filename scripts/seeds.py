@@ -20,26 +20,17 @@ import os
 import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-from sweep import evaluate_seeds  # noqa: E402
+from sweep import evaluate_seeds, option  # noqa: E402
 
 
 def main():
     args = sys.argv[1:]
-
-    def option(name, default):
-        if name not in args:
-            return default
-        i = args.index(name)
-        value = args[i + 1]
-        del args[i: i + 2]
-        return value
-
-    runs = int(option("--seeds", "5"))
-    params_file = option("--params", None)
-    json_out = option("--json", None)
+    runs = int(option(args, "--seeds", "5"))
+    params_file = option(args, "--params", None)
+    json_out = option(args, "--json", None)
     extra = []
     for name in ("--preset", "--superpixels"):
-        value = option(name, None)
+        value = option(args, name, None)
         if value is not None:
             extra += [name, value]
     gt_flow = "--gt-flow" in args

@@ -73,6 +73,16 @@ def evaluate_mean(cases, params, gt_flow, runs):
     return {case: sum(r[case] for r in results) / len(results) for case in results[0]}
 
 
+def option(args, name, default):
+    """The value after `name` in the list `args` (both are removed from it), or `default`."""
+    if name not in args:
+        return default
+    i = args.index(name)
+    value = args[i + 1]
+    del args[i: i + 2]
+    return value
+
+
 def defaults():
     """The library's defaults, as `soup reconstruct --help` prints them."""
     text = subprocess.run([SOUP, "reconstruct", "--help"], check=True, capture_output=True, text=True).stdout
@@ -82,14 +92,9 @@ def defaults():
 def main():
     args = [a for a in sys.argv[1:]]
     gt_flow = "--gt-flow" in args
-    only = None
-    if "--only" in args:
-        only = set(args[args.index("--only") + 1].split(","))
-        del args[args.index("--only"): args.index("--only") + 2]
-    runs = 1
-    if "--seeds" in args:
-        runs = int(args[args.index("--seeds") + 1])
-        del args[args.index("--seeds"): args.index("--seeds") + 2]
+    only = option(args, "--only", None)
+    only = set(only.split(",")) if only is not None else None
+    runs = int(option(args, "--seeds", "1"))
     cases = [a for a in args if not a.startswith("--")]
     if not cases or runs < 1:
         sys.exit(__doc__)
