@@ -20,7 +20,7 @@ use crate::soup::ensemble::{
 };
 use crate::soup::init::{InitParams, unit_scale_soup};
 use crate::soup::refine::{self, RefineParams, RefineReport};
-use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, scale_confidence, solve_scales};
+use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, depth_confidence, solve_scales};
 use crate::superpixels::graph::{BoundaryGraph, KnnGraph, boundary_graph, knn_graph};
 use crate::superpixels::{SlicParams, Superpixels, slic};
 
@@ -586,7 +586,7 @@ fn outputs(
     params: &Params,
 ) -> (Vec<f64>, Grid<f32>, Grid<f32>) {
     let (k, labels) = (inputs.intrinsics, &inputs.superpixels.labels);
-    let confidence = scale_confidence(soup, inputs, &params.scales);
+    let confidence = depth_confidence(soup, inputs, &params.scales);
     let depth = dense_depth(soup, labels, k);
     let (iw, ih) = pair.input_size;
     let (sx, sy) = pair.scale();

@@ -652,6 +652,31 @@ fn refinement_never_raises_its_energy_and_fills_pieces_without_flow() {
         .map(|(x, y)| *rec.depth.get(x, y))
         .collect();
     assert!(hole.iter().all(|z| z.is_finite() && *z > 0.0));
+    // That depth is a guess, and the report says so: a superpixel wholly inside the hole has no
+    // plane of its own, so its confidence is 0, while most of the image keeps its confidence.
+    let inside = |seg: &superpixel_soup::superpixels::Segment| {
+        let [x0, y0, x1, y1] = seg.bbox;
+        x0 >= 100 && x1 < 140 && y0 >= 40 && y1 < 70
+    };
+    let segments = &rec.superpixels.segments;
+    let guessed: Vec<usize> = (0..segments.len())
+        .filter(|&i| inside(&segments[i]))
+        .collect();
+    assert!(!guessed.is_empty(), "no superpixel lies inside the hole");
+    for &i in &guessed {
+        assert!(
+            rec.soup.pieces[i].degenerate.is_some(),
+            "piece {i} has a plane"
+        );
+        assert_eq!(rec.report.confidence[i], 0.0, "piece {i} in the hole");
+    }
+    let min = params.scales.min_confidence;
+    let known = rec.report.confidence.iter().filter(|&&c| c >= min).count();
+    assert!(
+        known as f64 > 0.8 * segments.len() as f64,
+        "{known} of {} superpixels confident",
+        segments.len()
+    );
 }
 
 #[test]

@@ -1791,6 +1791,20 @@ pub fn pair_weight(
     w
 }
 
+/// How firmly each piece's depth is known, in [0, 1]: its [`scale_confidence`], or 0 where the
+/// piece has no plane of its own ([`super::Piece::degenerate`]: too little trusted flow, no
+/// parallax, or a plane behind a camera, so it carries a neighbour's plane). Such a depth is
+/// the neighbour's surface extended over the piece, a guess however firmly the contacts then
+/// pin its scale: at 1500 superpixels the pieces with borrowed planes that the contacts pin had
+/// 4–14× the MRE of the pinned pieces with planes of their own on every case measured (static
+/// room 0.056 against 0.006, motorcycle 0.10 against 0.024, FlyingThings3D 0.77 against 0.054).
+pub fn depth_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Vec<f64> {
+    let scale = scale_confidence(soup, inputs, params);
+    (soup.pieces.iter().zip(scale))
+        .map(|(piece, c)| if piece.degenerate.is_some() { 0.0 } else { c })
+        .collect()
+}
+
 /// How strongly the contacts pin each piece's scale, in [0, 1]: the piece's rigid segment is
 /// moved by ±25 % in scale as a whole, and the smaller rise of the contact energy across the
 /// segment's rim is divided by σ per touching neighbour, the rise if every contact on the rim
