@@ -16,7 +16,8 @@
 //!    ego-motion explains about as well as its own hypothesis goes to the ego-motion
 //!    (`prefer_ego_motion`): the static world is one rigid body with one scale.
 //! 4. Planes: each superpixel's m under its motion by IRLS ([`super::plane`]); patches without
-//!    parallax or behind the camera are flagged and borrow a touching piece's plane and motion.
+//!    parallax or behind the camera are flagged and borrow the plane and motion of a touching
+//!    piece, the one nearest in colour first ([`fill_degenerate`]).
 
 use nalgebra::{Matrix3, Vector3};
 
@@ -162,7 +163,7 @@ pub fn unit_scale_soup(
     let pieces = fit_planes(sp, flow, reliable, k, &fit.hypotheses, &assignment, params);
     let noise_px = flow_noise(&samples, &fit.hypotheses, &assignment, focal);
     Ok(Soup {
-        pieces: fill_degenerate(pieces, adjacency),
+        pieces: fill_degenerate(pieces, sp, adjacency),
         hypotheses: fit.hypotheses,
         noise_px,
     })
@@ -726,34 +727,50 @@ fn fit_planes(
         .collect()
 }
 
-/// Gives every degenerate piece the plane and motion of a touching valid piece, growing
-/// breadth-first from the valid pieces.
-fn fill_degenerate(mut pieces: Vec<Piece>, adjacency: &[Vec<u32>]) -> Vec<Piece> {
+/// Gives every degenerate piece the plane and motion of a touching piece that has them,
+/// nearest colours first: the filled region grows from the valid pieces, each step filling the
+/// degenerate piece whose colour (mean CIELAB) is nearest to that of a filled neighbour, from
+/// that neighbour. A piece without trusted flow usually lies on the same surface as the
+/// touching piece that looks like it (a thin strap of an object whose flow the check rejects
+/// is more like the rest of the strap than like the wall behind it). Ties go to the lower
+/// indices, so the result is the same on every run.
+fn fill_degenerate(mut pieces: Vec<Piece>, sp: &Superpixels, adjacency: &[Vec<u32>]) -> Vec<Piece> {
+    use std::cmp::Reverse;
+    use std::collections::BinaryHeap;
     let mut filled: Vec<bool> = pieces.iter().map(|p| p.degenerate.is_none()).collect();
-    if !filled.iter().any(|&f| f) {
-        return pieces;
-    }
-    loop {
-        let mut progress = false;
-        for i in 0..pieces.len() {
-            if filled[i] {
-                continue;
-            }
-            if let Some(&donor) = adjacency[i].iter().find(|&&k| filled[k as usize]) {
-                let d = pieces[donor as usize];
-                let reason = pieces[i].degenerate;
-                pieces[i] = Piece {
-                    degenerate: reason,
-                    ..d
-                };
-                filled[i] = true;
-                progress = true;
+    // Squared colour distances are finite and non-negative, so their bit patterns order as
+    // they do.
+    let distance = |a: usize, b: usize| {
+        let (p, q) = (sp.segments[a].mean_lab, sp.segments[b].mean_lab);
+        let d2: f32 = (0..3).map(|c| (p[c] - q[c]) * (p[c] - q[c])).sum();
+        d2.to_bits()
+    };
+    let mut frontier = BinaryHeap::new();
+    let offer = |frontier: &mut BinaryHeap<_>, donor: usize, filled: &[bool]| {
+        for &i in &adjacency[donor] {
+            if !filled[i as usize] {
+                frontier.push(Reverse((distance(i as usize, donor), i, donor as u32)));
             }
         }
-        if !progress {
-            return pieces;
+    };
+    for donor in 0..pieces.len() {
+        if filled[donor] {
+            offer(&mut frontier, donor, &filled);
         }
     }
+    while let Some(Reverse((_, i, donor))) = frontier.pop() {
+        let (i, donor) = (i as usize, donor as usize);
+        if filled[i] {
+            continue;
+        }
+        pieces[i] = Piece {
+            degenerate: pieces[i].degenerate,
+            ..pieces[donor]
+        };
+        filled[i] = true;
+        offer(&mut frontier, i, &filled);
+    }
+    pieces
 }
 
 #[cfg(test)]
@@ -851,5 +868,55 @@ mod tests {
         let mut labels = vec![1, 1, 0];
         prefer_ego_motion(&costs, 0.3, &mut labels);
         assert_eq!(labels, vec![0, 1, 0]);
+    }
+
+    #[test]
+    fn a_piece_without_a_plane_borrows_from_the_neighbour_of_its_colour() {
+        // Pieces 0 (red) and 1 (blue) have planes; 2 (blue) touches both, 3 (red) touches 0 and
+        // 2, and 4 (blue) touches only 3. Listed first in 2's neighbours, red 0 must not win.
+        let lab = [
+            [50.0, 70.0, 50.0],
+            [40.0, 20.0, -70.0],
+            [42.0, 18.0, -66.0],
+            [52.0, 66.0, 48.0],
+            [41.0, 21.0, -69.0],
+        ];
+        let segments = lab
+            .iter()
+            .enumerate()
+            .map(|(i, &mean_lab)| crate::superpixels::Segment {
+                pixels: vec![i as u32],
+                anchor: [i as f64, 0.0],
+                mean_lab,
+                mean_rgb: [0; 3],
+                bbox: [i as u32, 0, i as u32, 0],
+            })
+            .collect();
+        let sp = Superpixels {
+            labels: Grid::from_fn(5, 1, |x, _| x as u32),
+            segments,
+        };
+        let piece = |depth: f64, degenerate| Piece {
+            r: Matrix3::identity(),
+            t_hat: Vector3::x(),
+            m: Vector3::new(0.0, 0.0, 1.0 / depth),
+            lambda: 1.0,
+            hypothesis: 0,
+            degenerate,
+        };
+        let none = Some(super::super::Degeneracy::TooFewPixels);
+        let pieces = vec![
+            piece(2.0, None),
+            piece(9.0, None),
+            piece(0.0, none),
+            piece(0.0, none),
+            piece(0.0, none),
+        ];
+        let adjacency = vec![vec![2, 3], vec![2], vec![0, 1, 3], vec![0, 2, 4], vec![3]];
+        let filled = fill_degenerate(pieces, &sp, &adjacency);
+        let depths: Vec<f64> = filled.iter().map(|p| 1.0 / p.m.z).collect();
+        assert_eq!(depths, [2.0, 9.0, 9.0, 2.0, 2.0]);
+        // They keep the reason they had no plane of their own.
+        assert!(filled[2..].iter().all(|p| p.degenerate == none));
     }
 }
