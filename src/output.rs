@@ -135,8 +135,8 @@ pub fn point_clouds(
     (c1, c2)
 }
 
-/// Frame 1 with the superpixels whose scale is unknown (confidence below `min`, see
-/// [`crate::soup::scales::scale_confidence`]) tinted magenta: the parts of the reconstruction
+/// Frame 1 with the superpixels whose depth is a guess (confidence below `min`, see
+/// [`crate::soup::scales::depth_confidence`]) tinted magenta: the parts of the reconstruction
 /// that are guesses. `confidence` has one value per label.
 pub fn confidence_picture(
     frame: &Frame,

@@ -88,8 +88,9 @@ pub struct Params {
     /// `medium` swings between 0.58 and 1.44 with the superpixel count (1200–1700) against
     /// 0.52–0.72 with `high`. Given flow is never recomputed.
     pub min_reliable_flow: f64,
-    /// A share in [0, 1]: when the scales of less than this share of the pixels are pinned
-    /// (their superpixel's `scale_confidence` at least `scales.min_confidence`) and the flow
+    /// A share in [0, 1]: when the depths of less than this share of the pixels are pinned
+    /// (their superpixel's confidence, `depth_confidence`, at least `scales.min_confidence`:
+    /// contacts pin its scale and its plane is its own) and the flow
     /// was computed with a preset that has a finer one, the reconstruction is made again from
     /// the finer preset's flow and the pass that pins more is kept; 0 never does. Flow too
     /// coarse to show where movers meet the world leaves their scales to guesses, which may
@@ -98,7 +99,10 @@ pub struct Params {
     /// and 55–78 % with `high` (0.14–0.19), while every other case pinned 74–100 % with
     /// `medium`. 0.7: below every other case, and above the crowd's 61 % when
     /// `scales.min_confidence` is 20 % lower (at 0.6 that brought the 1.28 back). The share is
-    /// that of each pass before fusion (which runs once, on the kept pass).
+    /// that of each pass before fusion (which runs once, on the kept pass). (These shares were
+    /// measured with the scale confidence alone; not counting borrowed planes lowers them by up
+    /// to 0.08 and changed no pass kept with the page's settings on the nine cases at 1500,
+    /// nor on the crowd, the table and the road at 1300–1700.)
     pub min_pinned_share: f64,
 }
 
@@ -154,11 +158,12 @@ pub struct Report {
     pub refine: Option<RefineReport>,
     /// The members fused into the soup (`None` when `ensemble.members` is 1 or less).
     pub ensemble: Option<EnsembleReport>,
-    /// Superpixels whose scale the contacts do not pin (confidence below
-    /// `scales.min_confidence`): their depth relative to the rest is a guess.
+    /// Superpixels whose depth is a guess (confidence below `scales.min_confidence`): the
+    /// contacts do not pin their scale, or their plane is a neighbour's.
     pub unconfident: usize,
-    /// Per superpixel (by label), how strongly the contacts pin its scale, in [0, 1]
-    /// ([`crate::soup::scales::scale_confidence`]).
+    /// Per superpixel (by label), how firmly its depth is known, in [0, 1]: how strongly the
+    /// contacts pin its scale, or 0 where its plane is borrowed from a neighbour
+    /// ([`crate::soup::scales::depth_confidence`]).
     pub confidence: Vec<f64>,
     pub notes: Vec<String>,
 }
@@ -394,8 +399,9 @@ fn preset_name(params: &FlowParams) -> &'static str {
     params.named_preset().map_or("custom", Preset::name)
 }
 
-/// Share in [0, 1] of the working-resolution pixels of `rec` whose superpixel's scale is pinned
-/// (its `scale_confidence` at least `scales.min_confidence` of the parameters it was made with).
+/// Share in [0, 1] of the working-resolution pixels of `rec` whose superpixel's depth is pinned
+/// (its confidence, [`crate::soup::scales::depth_confidence`], at least `scales.min_confidence`
+/// of the parameters it was made with).
 pub fn pinned_share(rec: &Reconstruction) -> f64 {
     let min = rec.report.params.scales.min_confidence;
     let pinned: usize = (rec.superpixels.segments.iter())

@@ -265,7 +265,7 @@ impl Viewer {
     }
 
     /// Flags the points of the superpixels `labels` (a `Uint32Array` or an array of numbers; the
-    /// page flags those whose scale is unknown) and shows them as `style` says: `"show"` (like
+    /// page flags those whose depth is a guess) and shows them as `style` says: `"show"` (like
     /// the others), `"mark"` (magenta, whatever the colour mode) or `"hide"` (not drawn:
     /// `shownPointCount` drops). The flags stay for later clouds of the same labels. Throws for
     /// another style or a label of 2²⁴ or more.

@@ -76,7 +76,7 @@ test('the sample through the file input, drawn with WebGPU, with every download'
   }
   await page.selectOption('#soup-mode', 'organised');
 
-  // Unknown-scale pieces (report confidence below min_confidence): hidden, the drawn points drop
+  // Guessed pieces (report confidence below min_confidence): hidden, the drawn points drop
   // by exactly the points of those superpixels (counted in the worker's cloud), in both soups;
   // marked, every point is drawn again.
   const unknownPoints = (soup) => page.evaluate(async (soup) => {

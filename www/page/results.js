@@ -71,7 +71,7 @@ function fillSummary(report) {
     ['Refinement energy', report.refine === null
       ? 'off'
       : `${report.refine.energies[0].toPrecision(4)} → ${report.refine.energies.at(-1).toPrecision(4)} in ${report.refine.energies.length - 1} iterations`],
-    ['Scale unknown', `${report.unconfident} superpixels (no contact pins their scale: their depth relative to the rest is a guess)`],
+    ['Depth guessed', `${report.unconfident} superpixels (no contact pins their scale, or they had too little trusted flow for a plane of their own: their depth relative to the rest is a guess)`],
   ];
   for (const note of report.notes) {
     rows.push(['Note', note]);

@@ -32,7 +32,8 @@ export const page = {
   points: 0,
   /** `savedAt` of the stored result when it is the one shown (persist.js), else null. */
   savedAt: null,
-  /** Labels of the last result's superpixels whose scale no contact pins (report confidence). */
+  /** Labels of the last result's superpixels whose depth is a guess (report confidence below
+   *  `min_confidence`: no contact pins their scale, or their plane is a neighbour's). */
   unconfident: [],
   /** The 3D viewer in use (replaced after a lost GPU device or context), or null. */
   viewer: null,

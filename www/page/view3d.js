@@ -169,7 +169,7 @@ function freeCloud(cloud) {
 }
 
 /**
- * Flags the superpixels of the last result whose scale no contact pins (`page.unconfident`) in
+ * Flags the superpixels of the last result whose depth is a guess (`page.unconfident`) in
  * the 3D view, shown as #unknown-scale says: like the others, marked magenta, or hidden.
  */
 export function showUnknownScale() {
