@@ -17,7 +17,7 @@
 //!    (`prefer_ego_motion`): the static world is one rigid body with one scale.
 //! 4. Planes: each superpixel's m under its motion by IRLS ([`super::plane`]); patches without
 //!    parallax or behind the camera are flagged and borrow the plane and motion of a touching
-//!    piece, the one nearest in colour first ([`fill_degenerate`]).
+//!    piece, the one nearest in colour first (`fill_degenerate`).
 
 use nalgebra::{Matrix3, Vector3};
 
