@@ -332,7 +332,7 @@ fn reconstruct_until_pinned(
     let mut held = Some(first_pass);
     while let Some(finer) = (last.used.finer()).filter(|_| last.pinned < params.min_pinned_share) {
         notes.push(format!(
-            "the scales of only {:.0} % of the image were pinned with the flow of preset {}; \
+            "the depths of only {:.0} % of the image were pinned with the flow of preset {}; \
              reconstructed again with preset {}",
             100.0 * last.pinned,
             preset_name(&last.used),

@@ -81,7 +81,7 @@ export function resetProgress() {
 function showProgress(stage, fraction) {
   const items = [...$('stages').children];
   const index = items.findIndex((item) => item.dataset.stage === stage);
-  // The pipeline starts over from the flow when too few of the scales were pinned: say so
+  // The pipeline starts over from the flow when too few of the depths were pinned: say so
   // rather than let the bar run back without a word.
   if (index < furthestStage) {
     passes += 1;
