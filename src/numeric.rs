@@ -96,6 +96,31 @@ pub fn hypot_f32(x: f32, y: f32) -> f32 {
     libm::hypotf(x, y)
 }
 
+/// The weighted median of the values v of `items` (weight, v), sorting them by v: the value
+/// where the weight below it and the weight above it each stay under half the total, or the
+/// mean of two neighbouring values where the weight up to the first is exactly half (so with
+/// equal weights it is the plain median). `None` without positive total weight.
+pub fn weighted_median(items: &mut [(f64, f64)]) -> Option<f64> {
+    items.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let total: f64 = items.iter().map(|t| t.0).sum();
+    if total.is_nan() || total <= 0.0 {
+        return None;
+    }
+    let mut below = 0.0;
+    for (k, &(w, v)) in items.iter().enumerate() {
+        below += w;
+        if below == 0.5 * total
+            && let Some(&(_, next)) = items[k + 1..].iter().find(|t| t.0 > 0.0)
+        {
+            return Some(0.5 * (v + next));
+        }
+        if below >= 0.5 * total {
+            return Some(v);
+        }
+    }
+    items.last().map(|t| t.1)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -149,5 +174,24 @@ mod tests {
                 "{x}"
             );
         }
+    }
+
+    #[test]
+    fn weighted_medians_split_the_weight() {
+        let mut items = vec![(1.0, 3.0), (0.5, -1.0), (2.0, 0.5), (0.2, 9.0)];
+        assert_eq!(weighted_median(&mut items), Some(0.5));
+        let mut heavy = vec![(0.1, 0.0), (5.0, 2.0)];
+        assert_eq!(weighted_median(&mut heavy), Some(2.0));
+        assert_eq!(weighted_median(&mut []), None);
+        assert_eq!(weighted_median(&mut [(0.0, 1.0)]), None);
+        // Equal weights: the plain median, the mean of the middle two for an even count.
+        assert_eq!(
+            weighted_median(&mut [(1.0, 4.0), (1.0, 1.0), (1.0, 2.0)]),
+            Some(2.0)
+        );
+        assert_eq!(weighted_median(&mut [(1.0, 4.0), (1.0, 1.0)]), Some(2.5));
+        // A light value on one side moves the median less than a heavy one.
+        let mut guesses = vec![(1.0, 1.0), (0.25, 5.0), (0.25, 6.0), (1.0, 1.2)];
+        assert_eq!(weighted_median(&mut guesses), Some(1.2));
     }
 }

@@ -16,7 +16,7 @@ use crate::input::FramePair;
 use crate::output::{PointCloud, dense_depth, depth_at, point_clouds, scene_flow, strided_depth};
 use crate::soup::Soup;
 use crate::soup::ensemble::{
-    EnsembleParams, EnsembleReport, MAX_MEMBERS, SAMPLE_STRIDE, fuse_scales,
+    EnsembleParams, EnsembleReport, MAX_MEMBERS, SAMPLE_STRIDE, Vote, fuse_scales,
 };
 use crate::soup::init::{InitParams, unit_scale_soup};
 use crate::soup::refine::{self, RefineParams, RefineReport};
@@ -628,6 +628,7 @@ fn fuse(
         seen,
         params,
         &rec.superpixels.labels,
+        &rec.report.confidence,
         &mut rec.soup,
         &mut |f| progress(Stage::Ensemble, f),
     );
@@ -729,17 +730,19 @@ fn solve_soup(
     })
 }
 
-/// Fuses members into `soup` (frame-1 labels `labels`) when `params.ensemble.members` is more
-/// than 1 (see [`crate::soup::ensemble`]): each member is [`solve_soup`] over what `seen` shows
-/// from one of [`EnsembleParams::member_counts`] superpixels, with the members' cheaper
-/// refinement ([`solve_members`]: natively several at once); their depth maps (at every
-/// [`SAMPLE_STRIDE`]-th pixel) move each piece of `soup` to their median scale. A member that
-/// cannot be made is left out with a note in the report. `progress` gets the share of members
-/// done.
+/// Fuses members into `soup` (frame-1 labels `labels`, each superpixel's depth confidence
+/// `confidence`) when `params.ensemble.members` is more than 1 (see [`crate::soup::ensemble`]):
+/// each member is [`solve_soup`] over what `seen` shows from one of
+/// [`EnsembleParams::member_counts`] superpixels, with the members' cheaper refinement
+/// ([`solve_members`]: natively several at once); their votes (depth maps at every
+/// [`SAMPLE_STRIDE`]-th pixel, and where each is pinned) move each piece of `soup` to their
+/// weighted median scale. A member that cannot be made is left out with a note in the report.
+/// `progress` gets the share of members done.
 fn fuse_members(
     seen: Observed,
     params: &Params,
     labels: &Grid<u32>,
+    confidence: &[f64],
     soup: &mut Soup,
     progress: &mut dyn FnMut(f32),
 ) -> Option<EnsembleReport> {
@@ -754,27 +757,55 @@ fn fuse_members(
         member.refine.iterations = ensemble.member_iterations;
         member.refine.particles = ensemble.member_particles;
         let solved = solve_soup(seen, &member, None, &mut Clock::start(), &mut |_, _| {})?;
+        let inputs = (solved.segmentation).scale_inputs(seen.flow, seen.reliable, seen.k);
+        let confidence = depth_confidence(&solved.soup, &inputs, &params.scales);
         let labels = &solved.segmentation.superpixels.labels;
-        Ok(strided_depth(&solved.soup, labels, seen.k, SAMPLE_STRIDE))
+        Ok(vote_of(&solved.soup, labels, &confidence, seen.k, params))
     };
     let made = solve_members(member_threads(), &counts, member_depth, progress);
-    let (mut depths, mut failed) = (Vec::new(), Vec::new());
-    for (count, depth) in counts.iter().zip(made) {
-        match depth {
-            Ok(d) => depths.push(d),
+    let (mut votes, mut failed) = (Vec::new(), Vec::new());
+    for (count, vote) in counts.iter().zip(made) {
+        match vote {
+            Ok(v) => votes.push(v),
             Err(e) => failed.push(format!("{count} superpixels: {e}")),
         }
     }
-    let own = strided_depth(soup, labels, seen.k, SAMPLE_STRIDE);
-    let sampled_labels = Grid::from_fn(own.width(), own.height(), |x, y| {
-        *labels.get(x * SAMPLE_STRIDE, y * SAMPLE_STRIDE)
-    });
-    let rescaled = fuse_scales(soup, &sampled_labels, &own, &depths);
+    let own = vote_of(soup, labels, confidence, seen.k, params);
+    let sampled_labels = sampled(labels);
+    let rescaled = fuse_scales(
+        soup,
+        &sampled_labels,
+        &own,
+        &votes,
+        params.ensemble.guess_weight,
+    );
     Some(EnsembleReport {
         counts,
         failed,
         rescaled,
     })
+}
+
+/// `labels` at every [`SAMPLE_STRIDE`]-th pixel in x and y, as the fusion sees them.
+fn sampled(labels: &Grid<u32>) -> Grid<u32> {
+    let s = SAMPLE_STRIDE;
+    let (w, h) = (labels.width().div_ceil(s), labels.height().div_ceil(s));
+    Grid::from_fn(w, h, |x, y| *labels.get(x * s, y * s))
+}
+
+/// A soup's vote in the fusion: its depth at every [`SAMPLE_STRIDE`]-th pixel, pinned where the
+/// superpixel's depth confidence (`confidence`, by label) is at least `scales.min_confidence`.
+fn vote_of(
+    soup: &Soup,
+    labels: &Grid<u32>,
+    confidence: &[f64],
+    k: &Intrinsics,
+    params: &Params,
+) -> Vote {
+    let depth = strided_depth(soup, labels, k, SAMPLE_STRIDE);
+    let min = params.scales.min_confidence;
+    let pinned = sampled(labels).map(|&l| confidence.get(l as usize).is_some_and(|&c| c >= min));
+    Vote { depth, pinned }
 }
 
 /// At most this many members are made at once natively: each holds a whole reconstruction's
@@ -800,14 +831,14 @@ fn member_threads() -> usize {
 /// deterministic, so the results do not depend on how many threads run them. `progress` gets
 /// the share of members done, from 0, as they finish.
 #[cfg_attr(target_arch = "wasm32", allow(unused_variables))]
-fn solve_members<F>(
+fn solve_members<T: Send, F>(
     threads: usize,
     counts: &[usize],
     member: F,
     progress: &mut dyn FnMut(f32),
-) -> Vec<Result<Grid<f32>>>
+) -> Vec<Result<T>>
 where
-    F: Fn(usize) -> Result<Grid<f32>> + Sync,
+    F: Fn(usize) -> Result<T> + Sync,
 {
     #[cfg(not(target_arch = "wasm32"))]
     if threads > 1 && counts.len() > 1 {
@@ -826,19 +857,19 @@ where
 /// and each result goes to its member's place, whichever finishes first. A panic (a bug, never
 /// bad input) goes on from here once every thread has stopped, as it would without threads.
 #[cfg(not(target_arch = "wasm32"))]
-fn in_parallel<F>(
+fn in_parallel<T: Send, F>(
     threads: usize,
     counts: &[usize],
     member: F,
     progress: &mut dyn FnMut(f32),
-) -> Vec<Result<Grid<f32>>>
+) -> Vec<Result<T>>
 where
-    F: Fn(usize) -> Result<Grid<f32>> + Sync,
+    F: Fn(usize) -> Result<T> + Sync,
 {
     use std::sync::atomic::{AtomicUsize, Ordering};
     let n = counts.len();
     let next = AtomicUsize::new(0);
-    let mut slots: Vec<Option<Result<Grid<f32>>>> = (0..n).map(|_| None).collect();
+    let mut slots: Vec<Option<Result<T>>> = (0..n).map(|_| None).collect();
     progress(0.0);
     std::thread::scope(|scope| {
         let (done_tx, done_rx) = std::sync::mpsc::channel();

@@ -85,7 +85,7 @@ use crate::camera::Intrinsics;
 use crate::flow::FlowField;
 use crate::grid::Grid;
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
-use crate::numeric::{atanh, cos, exp, hypot, ln, min, tanh};
+use crate::numeric::{atanh, cos, exp, hypot, ln, min, tanh, weighted_median};
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::{BoundaryEdge, BoundaryGraph};
 
@@ -1369,23 +1369,6 @@ fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64) {
     }
 }
 
-/// The weighted median of the values c of (w, c) (sorts them); `None` without weight.
-fn weighted_median(items: &mut [(f64, f64)]) -> Option<f64> {
-    items.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let total: f64 = items.iter().map(|t| t.0).sum();
-    if total.is_nan() || total <= 0.0 {
-        return None;
-    }
-    let mut acc = 0.0;
-    items
-        .iter()
-        .find(|t| {
-            acc += t.0;
-            acc >= 0.5 * total
-        })
-        .map(|t| t.1)
-}
-
 /// Start: a maximum spanning tree over segment pairs by how much their links weigh, walked from
 /// the reference segment; each segment takes the offset that best meets its tree parent.
 fn spanning_tree_start(
@@ -2387,15 +2370,6 @@ mod tests {
             let v = placement(weight, on_ego);
             assert!((v - 1.0).abs() < 1e-9, "{weight} {on_ego}: {v}");
         }
-    }
-
-    #[test]
-    fn weighted_medians_split_the_weight() {
-        let mut items = vec![(1.0, 3.0), (0.5, -1.0), (2.0, 0.5), (0.2, 9.0)];
-        assert_eq!(weighted_median(&mut items), Some(0.5));
-        let mut heavy = vec![(0.1, 0.0), (5.0, 2.0)];
-        assert_eq!(weighted_median(&mut heavy), Some(2.0));
-        assert_eq!(weighted_median(&mut []), None);
     }
 
     #[test]
