@@ -256,6 +256,7 @@ pub fn reconstruct(
     for (name, share) in [
         ("min_reliable_flow", params.min_reliable_flow),
         ("min_pinned_share", params.min_pinned_share),
+        ("ensemble.guess_weight", params.ensemble.guess_weight),
     ] {
         if !(0.0..=1.0).contains(&share) {
             return Err(Error::InvalidParameter(format!(
@@ -751,18 +752,19 @@ fn fuse_members(
         return None;
     }
     let counts = ensemble.member_counts(params.superpixels.count);
-    let member_depth = |count: usize| {
+    let member_vote = |count: usize| {
         let mut member = *params;
         member.superpixels.count = count;
         member.refine.iterations = ensemble.member_iterations;
         member.refine.particles = ensemble.member_particles;
         let solved = solve_soup(seen, &member, None, &mut Clock::start(), &mut |_, _| {})?;
-        let inputs = (solved.segmentation).scale_inputs(seen.flow, seen.reliable, seen.k);
+        let segmentation = &solved.segmentation;
+        let inputs = segmentation.scale_inputs(seen.flow, seen.reliable, seen.k);
         let confidence = depth_confidence(&solved.soup, &inputs, &params.scales);
-        let labels = &solved.segmentation.superpixels.labels;
+        let labels = &segmentation.superpixels.labels;
         Ok(vote_of(&solved.soup, labels, &confidence, seen.k, params))
     };
-    let made = solve_members(member_threads(), &counts, member_depth, progress);
+    let made = solve_members(member_threads(), &counts, member_vote, progress);
     let (mut votes, mut failed) = (Vec::new(), Vec::new());
     for (count, vote) in counts.iter().zip(made) {
         match vote {

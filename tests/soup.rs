@@ -763,3 +763,25 @@ fn the_table_s_objects_stand_on_it_where_the_floor_lies_in_front_of_their_bottom
     let m = depth_metrics(&s.depth1, &rec.depth_input).unwrap();
     assert!(m.mre < 0.033, "table: MRE {}", m.mre);
 }
+
+#[test]
+fn fusion_settings_outside_their_range_are_refused() {
+    // Checked before any work: a guess weighs between nothing and what a pinned depth weighs,
+    // and at most 15 members are fused.
+    let s = render(SceneKind::Flag, 64, 32).unwrap();
+    let pair = pair_of(&s.frame1, &s.frame2, s.intrinsics);
+    let run = |params: &Params| {
+        reconstruct(&pair, FlowInput::Given(s.flow12.clone()), params, &mut |_, _| {})
+    };
+    for bad in [-0.1, 1.5, f64::NAN] {
+        let mut params = Params::default();
+        params.ensemble.guess_weight = bad;
+        assert!(
+            matches!(run(&params), Err(Error::InvalidParameter(m)) if m.contains("guess_weight")),
+            "{bad}"
+        );
+    }
+    let mut params = Params::default();
+    params.ensemble.members = 16;
+    assert!(matches!(run(&params), Err(Error::InvalidParameter(_))));
+}
