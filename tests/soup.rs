@@ -771,7 +771,12 @@ fn fusion_settings_outside_their_range_are_refused() {
     let s = render(SceneKind::Flag, 64, 32).unwrap();
     let pair = pair_of(&s.frame1, &s.frame2, s.intrinsics);
     let run = |params: &Params| {
-        reconstruct(&pair, FlowInput::Given(s.flow12.clone()), params, &mut |_, _| {})
+        reconstruct(
+            &pair,
+            FlowInput::Given(s.flow12.clone()),
+            params,
+            &mut |_, _| {},
+        )
     };
     for bad in [-0.1, 1.5, f64::NAN] {
         let mut params = Params::default();
