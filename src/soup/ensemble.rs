@@ -63,10 +63,11 @@ pub struct EnsembleParams {
     /// piece's depth confidence below `scales.min_confidence`), against 1 where it is pinned;
     /// in [0, 1].
     /// 0.25: over five seeds at 1500 superpixels (preset high) the crowd's mean error fell
-    /// 0.142 → 0.130 (at every seed) and the flag's 0.112 → 0.101 (at four seeds of five: a
-    /// band of the flag that one member guesses, another pins), the rest within 0.003. 1 is the
-    /// plain median; 0 (guesses left out wherever one member pins) took FlyingThings3D, most of
-    /// whose depth is guessed, from 0.310 to 0.339: a median of guesses is better than one.
+    /// 0.142 → 0.130 (at every seed) and the flag's 0.112 → 0.094 (at four seeds of five: a
+    /// band of the flag that one member guesses, another pins), the rest within 0.004. 1 is the
+    /// plain median; 0 for the members' guesses took FlyingThings3D, a third of whose pixels
+    /// are guesses carrying most of its error, from 0.310 to 0.339: where every member
+    /// guesses, a median of guesses is better than one.
     pub guess_weight: f64,
 }
 
