@@ -136,12 +136,6 @@ pub struct Vote {
 }
 
 impl Vote {
-    /// A vote pinned everywhere (every depth weighs 1).
-    pub fn pinned(depth: Grid<f32>) -> Self {
-        let pinned = depth.map(|_| true);
-        Vote { depth, pinned }
-    }
-
     /// The weight of pixel `i`'s depth: 1 where pinned, else `guess_weight`.
     fn weight(&self, i: usize, guess_weight: f64) -> f64 {
         if self.pinned.data()[i] {
@@ -283,9 +277,15 @@ mod tests {
         labels.map(|&l| depths[l as usize])
     }
 
+    /// A vote pinned everywhere (every depth weighs 1).
+    fn all_pinned(depth: Grid<f32>) -> Vote {
+        let pinned = depth.map(|_| true);
+        Vote { depth, pinned }
+    }
+
     /// A vote pinned everywhere with piece i at `depths[i]`.
     fn pinned(labels: &Grid<u32>, depths: &[f32]) -> Vote {
-        Vote::pinned(depth_map(labels, depths))
+        all_pinned(depth_map(labels, depths))
     }
 
     /// A vote with piece i at `depths[i]`, a guess on the pieces in `guessed`.
@@ -348,7 +348,7 @@ mod tests {
     fn unknown_depths_and_mismatched_members_are_left_out() {
         let (mut soup, labels) = strips(3);
         let own = pinned(&labels, &[1.0, f32::NAN, 1.0]);
-        let wrong_size = Vote::pinned(Grid::filled(7, 7, 5.0f32));
+        let wrong_size = all_pinned(Grid::filled(7, 7, 5.0f32));
         let members = [
             pinned(&labels, &[1.0, 1.0, 3.0]),
             pinned(&labels, &[1.0, 1.0, 3.0]),
