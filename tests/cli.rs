@@ -511,3 +511,62 @@ fn truth_test_the_refinement_energy_ranks_the_true_states_below_the_solution_on_
         assert!(mre < 0.01, "{scene}: true states' MRE {mre}");
     }
 }
+
+#[test]
+fn eval_groups_splits_the_error_by_ground_truth_group() {
+    // `soup eval --groups` on a case with motion groups (groups1.png): one row per ground-truth
+    // group. Its pixels partition the valid pixels and its MRE shares add up to the case's MRE.
+    // With exact flow the street's static world (group 0) lies on the ego-motion and at its
+    // true depth (ratio within 2 % of 1 after the global median alignment; 1.000 measured at
+    // this size), and each of its two cars has a row.
+    let dir = temp_dir("eval-groups");
+    let case = synth_scene(&dir, "street", "512x218");
+    let json = dir.join("eval.json");
+    let out = soup_ok(&[
+        "eval",
+        case.to_str().unwrap(),
+        "--gt-flow",
+        "--superpixels",
+        "600",
+        "--groups",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    // group, pixels, MRE, depth ratio, MRE share, main hypothesis, its share.
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip_while(|l| !l.starts_with("| GT group |"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            l.split(['|', '(', ')'])
+                .map(str::trim)
+                .filter(|c| !c.is_empty())
+                .map(|c| c.parse().unwrap())
+                .collect()
+        })
+        .collect();
+    assert_eq!(rows.len(), 3, "one row per group expected in:\n{text}");
+    let result: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let metrics = &result[0]["metrics"];
+    let pixels: f64 = rows.iter().map(|r| r[1]).sum();
+    assert_eq!(pixels, metrics["pixels"].as_f64().unwrap());
+    let shares: f64 = rows.iter().map(|r| r[4]).sum();
+    let mre = metrics["mre"].as_f64().unwrap();
+    assert!(
+        (shares - mre).abs() < 0.001,
+        "shares {shares} against MRE {mre}"
+    );
+    let world = &rows[0];
+    assert_eq!(world[0], 0.0);
+    assert!(
+        (world[3] - 1.0).abs() < 0.02,
+        "static world's ratio {}",
+        world[3]
+    );
+    assert!(
+        world[5] == 0.0 && world[6] >= 0.95,
+        "static world on {world:?}"
+    );
+}

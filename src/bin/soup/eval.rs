@@ -36,7 +36,8 @@ pub struct Args {
     #[command(flatten)]
     pipeline: PipelineArgs,
     /// Also print, per motion hypothesis in use, its superpixels, the ground-truth motion group
-    /// most of its pixels belong to (and that share) and the error of its solved scale.
+    /// most of its pixels belong to (and that share) and the error of its solved scale; and, for
+    /// a case with groups1.png, per ground-truth group its MRE, depth ratio and share of the MRE.
     #[arg(long)]
     groups: bool,
     /// Also run the truth test: the scale energy and MRE of the solution, of the oracle scales
@@ -183,7 +184,8 @@ fn confident_depth(rec: &Reconstruction, width: usize, height: usize) -> Grid<f3
 /// Per motion hypothesis in use: superpixels, pixels, the ground-truth group holding most of its
 /// pixels and that share (purity), and its scale error: the solved λ (after the global median
 /// alignment) over the oracle scale median(z_gt / z) of its own pixels, minus 1; and the part of
-/// the MRE its pixels make up.
+/// the MRE its pixels make up. Then, for a case with `groups1.png`, the same seen from each
+/// ground-truth group ([`print_truth_groups`]).
 fn print_groups(rec: &Reconstruction, case: &Case) {
     let Some(gt) = case.depth1.as_ref() else {
         return;
@@ -254,6 +256,59 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
             },
             share,
             global / oracle - 1.0,
+        );
+    }
+    if let Some(groups) = &case.groups1 {
+        print_truth_groups(rec, gt, groups);
+    }
+}
+
+/// Per ground-truth motion group (`groups1.png`: 0 the static world, 1.. each mover): its valid
+/// pixels, its MRE, its depth ratio (the median over its pixels of s·z / z_gt after the global
+/// median alignment s: below 1 too near, above 1 too far), its part of the MRE (the column sums
+/// to the MRE), and the motion hypothesis most of its pixels are on, with that share. Where a
+/// reconstruction's error sits, object by object.
+fn print_truth_groups(rec: &Reconstruction, gt: &Grid<f32>, groups: &Grid<u8>) {
+    let depth = rec.depth.data();
+    // (group, hypothesis, z_gt / z) of every pixel valid in both maps.
+    let pixels: Vec<(usize, usize, f64)> = (rec.superpixels.labels.data().iter())
+        .zip(gt.data())
+        .zip(groups.data())
+        .zip(depth)
+        .filter(|&(((_, &g), _), &z)| g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0)
+        .map(|(((&l, &g), &group), &z)| {
+            let h = rec.soup.pieces[l as usize].hypothesis;
+            (group as usize, h, g as f64 / z as f64)
+        })
+        .collect();
+    if pixels.is_empty() {
+        return;
+    }
+    let valid = pixels.len() as f64;
+    let global = median(pixels.iter().map(|p| p.2).collect());
+    let hyps = rec.soup.hypotheses.len();
+    println!();
+    println!("| GT group | pixels | MRE | depth ratio | MRE share | main hypothesis (share) |");
+    println!("| --- | --- | --- | --- | --- | --- |");
+    for group in 0..=u8::MAX as usize {
+        let mine: Vec<&(usize, usize, f64)> = pixels.iter().filter(|p| p.0 == group).collect();
+        if mine.is_empty() {
+            continue;
+        }
+        let count = mine.len();
+        let error: f64 = mine.iter().map(|p| (global / p.2 - 1.0).abs()).sum();
+        let ratio = median(mine.iter().map(|p| global / p.2).collect());
+        let mut on = vec![0usize; hyps];
+        mine.iter().for_each(|p| on[p.1] += 1);
+        let (main, most) = (0..hyps)
+            .map(|h| (h, on[h]))
+            .max_by_key(|&(h, c)| (c, std::cmp::Reverse(h)))
+            .unwrap_or((0, 0));
+        println!(
+            "| {group} | {count} | {:.4} | {ratio:.3} | {:.4} | {main} ({:.2}) |",
+            error / count as f64,
+            error / valid,
+            most as f64 / count as f64,
         );
     }
 }
