@@ -318,8 +318,13 @@ impl Surfaces<'_> {
         motion: &Motion,
         adjacency: &[Vec<u32>],
     ) -> Option<f64> {
-        let plane =
-            |i: usize| fit_plane(&self.samples[i], motion, self.focal, self.min_parallax_px).ok();
+        // Each superpixel's plane is fitted once, however many pairs it is in.
+        let mut planes = std::collections::HashMap::new();
+        let mut plane = |i: usize| {
+            *planes.entry(i).or_insert_with(|| {
+                fit_plane(&self.samples[i], motion, self.focal, self.min_parallax_px).ok()
+            })
+        };
         let mut gaps = Vec::new();
         for &i in members {
             let Some(mi) = plane(i) else {
@@ -965,6 +970,26 @@ mod tests {
         assert_eq!(labels, vec![0, 1, 0]);
     }
 
+    /// Superpixels of one pixel each in a row, of mean colours `lab` (CIELAB), their anchors
+    /// `spacing` px apart along the top row.
+    fn pixel_row(lab: &[[f32; 3]], spacing: f64) -> Superpixels {
+        let segments = lab
+            .iter()
+            .enumerate()
+            .map(|(i, &mean_lab)| crate::superpixels::Segment {
+                pixels: vec![i as u32],
+                anchor: [spacing * i as f64, 0.0],
+                mean_lab,
+                mean_rgb: [0; 3],
+                bbox: [i as u32, 0, i as u32, 0],
+            })
+            .collect();
+        Superpixels {
+            labels: Grid::from_fn(lab.len(), 1, |x, _| x as u32),
+            segments,
+        }
+    }
+
     #[test]
     fn regions_meet_where_their_planes_continue_under_one_motion() {
         // Three superpixels in a row, 40 px apart, on fronto-parallel planes at depths 4, 4 and
@@ -995,19 +1020,7 @@ mod tests {
                     .collect()
             })
             .collect();
-        let segments = (0..3)
-            .map(|i| crate::superpixels::Segment {
-                pixels: vec![i as u32],
-                anchor: [40.0 * i as f64, 0.0],
-                mean_lab: [0.0; 3],
-                mean_rgb: [0; 3],
-                bbox: [i as u32, 0, i as u32, 0],
-            })
-            .collect();
-        let sp = Superpixels {
-            labels: Grid::from_fn(3, 1, |x, _| x as u32),
-            segments,
-        };
+        let sp = pixel_row(&[[0.0; 3]; 3], 40.0);
         let surfaces = Surfaces {
             sp: &sp,
             samples: &samples,
@@ -1040,21 +1053,7 @@ mod tests {
             [52.0, 66.0, 48.0],
             [41.0, 21.0, -69.0],
         ];
-        let segments = lab
-            .iter()
-            .enumerate()
-            .map(|(i, &mean_lab)| crate::superpixels::Segment {
-                pixels: vec![i as u32],
-                anchor: [i as f64, 0.0],
-                mean_lab,
-                mean_rgb: [0; 3],
-                bbox: [i as u32, 0, i as u32, 0],
-            })
-            .collect();
-        let sp = Superpixels {
-            labels: Grid::from_fn(5, 1, |x, _| x as u32),
-            segments,
-        };
+        let sp = pixel_row(&lab, 1.0);
         let piece = |depth: f64, degenerate| Piece {
             r: Matrix3::identity(),
             t_hat: Vector3::x(),

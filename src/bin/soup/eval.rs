@@ -202,7 +202,8 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
     for p in &rec.soup.pieces {
         pieces[p.hypothesis] += 1;
     }
-    let mut all = Vec::new();
+    // (pixel, hypothesis, z_gt / z) of every pixel valid in both maps.
+    let mut valid_pixels = Vec::new();
     for (i, (&l, &g)) in labels.data().iter().zip(gt.data()).enumerate() {
         let z = rec.depth.data()[i];
         let h = rec.soup.pieces[l as usize].hypothesis;
@@ -211,14 +212,14 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
         }
         if g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0 {
             ratios[h].push(g as f64 / z as f64);
-            all.push(g as f64 / z as f64);
+            valid_pixels.push((i, h, g as f64 / z as f64));
         }
     }
-    if all.is_empty() {
+    if valid_pixels.is_empty() {
         return;
     }
-    let valid = all.len() as f64;
-    let global = median(all);
+    let valid = valid_pixels.len() as f64;
+    let global = median(valid_pixels.iter().map(|p| p.2).collect());
     println!(
         "| hypothesis | superpixels | pixels | main GT group | purity | scale error | MRE share |"
     );
@@ -259,47 +260,38 @@ fn print_groups(rec: &Reconstruction, case: &Case) {
         );
     }
     if let Some(groups) = &case.groups1 {
-        print_truth_groups(rec, gt, groups);
+        print_truth_groups(&valid_pixels, global, groups, hyps);
     }
 }
 
-/// Per ground-truth motion group (`groups1.png`: 0 the static world, 1.. each mover): its valid
+/// Per ground-truth motion group (`groups`: 0 the static world, 1.. each mover): its valid
 /// pixels, its MRE, its depth ratio (the median over its pixels of s·z / z_gt after the global
-/// median alignment s: below 1 too near, above 1 too far), its part of the MRE (the column sums
-/// to the MRE), and the motion hypothesis most of its pixels are on, with that share. Where a
-/// reconstruction's error sits, object by object.
-fn print_truth_groups(rec: &Reconstruction, gt: &Grid<f32>, groups: &Grid<u8>) {
-    let depth = rec.depth.data();
-    // (group, hypothesis, z_gt / z) of every pixel valid in both maps.
-    let pixels: Vec<(usize, usize, f64)> = (rec.superpixels.labels.data().iter())
-        .zip(gt.data())
-        .zip(groups.data())
-        .zip(depth)
-        .filter(|&(((_, &g), _), &z)| g.is_finite() && g > 0.0 && z.is_finite() && z > 0.0)
-        .map(|(((&l, &g), &group), &z)| {
-            let h = rec.soup.pieces[l as usize].hypothesis;
-            (group as usize, h, g as f64 / z as f64)
-        })
-        .collect();
-    if pixels.is_empty() {
-        return;
+/// median alignment s = `global`: below 1 too near, above 1 too far), its part of the MRE (the
+/// column sums to the MRE), and the motion hypothesis most of its pixels are on, with that
+/// share. Where a reconstruction's error sits, object by object. `valid_pixels` holds
+/// (pixel, hypothesis, z_gt / z) of every pixel valid in both depth maps; `hyps` is the number
+/// of hypotheses.
+fn print_truth_groups(
+    valid_pixels: &[(usize, usize, f64)],
+    global: f64,
+    groups: &Grid<u8>,
+    hyps: usize,
+) {
+    // (hypothesis, z_gt / z) of each group's valid pixels.
+    let mut by_group = vec![Vec::new(); u8::MAX as usize + 1];
+    for &(i, h, r) in valid_pixels {
+        by_group[groups.data()[i] as usize].push((h, r));
     }
-    let valid = pixels.len() as f64;
-    let global = median(pixels.iter().map(|p| p.2).collect());
-    let hyps = rec.soup.hypotheses.len();
+    let valid = valid_pixels.len() as f64;
     println!();
     println!("| GT group | pixels | MRE | depth ratio | MRE share | main hypothesis (share) |");
     println!("| --- | --- | --- | --- | --- | --- |");
-    for group in 0..=u8::MAX as usize {
-        let mine: Vec<&(usize, usize, f64)> = pixels.iter().filter(|p| p.0 == group).collect();
-        if mine.is_empty() {
-            continue;
-        }
+    for (group, mine) in by_group.iter().enumerate().filter(|(_, m)| !m.is_empty()) {
         let count = mine.len();
-        let error: f64 = mine.iter().map(|p| (global / p.2 - 1.0).abs()).sum();
-        let ratio = median(mine.iter().map(|p| global / p.2).collect());
+        let error: f64 = mine.iter().map(|p| (global / p.1 - 1.0).abs()).sum();
+        let ratio = median(mine.iter().map(|p| global / p.1).collect());
         let mut on = vec![0usize; hyps];
-        mine.iter().for_each(|p| on[p.1] += 1);
+        mine.iter().for_each(|p| on[p.0] += 1);
         let (main, most) = (0..hyps)
             .map(|h| (h, on[h]))
             .max_by_key(|&(h, c)| (c, std::cmp::Reverse(h)))
