@@ -65,7 +65,7 @@ fn main() {
             let times = common::time_ms(runs, || {
                 let mut refined = soup.clone();
                 let problem = Problem::new(&refined, &inputs, &scales, &refine_params);
-                refine(&mut refined, &problem)
+                refine(&mut refined, &problem, &inputs, &scales)
             });
             common::print_row(&format!("{name} ({})", kind.name()), "1024×436", &times);
         }

@@ -718,7 +718,7 @@ fn solve_soup(
     progress(Stage::Refine, 0.0);
     let refine = (params.refine.iterations > 0).then(|| {
         let problem = refine::Problem::new(&soup, &inputs, &params.scales, &params.refine);
-        refine::refine(&mut soup, &problem)
+        refine::refine(&mut soup, &problem, &inputs, &params.scales)
     });
     clock.lap(Stage::Refine);
     Ok(Solved {

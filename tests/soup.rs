@@ -640,6 +640,13 @@ fn refinement_never_raises_its_energy_and_fills_pieces_without_flow() {
         report.energies.last() < report.energies.first(),
         "the refinement moved"
     );
+    let last = report.energies.last().copied().unwrap();
+    assert!(
+        report.expansion_energy <= last + 1e-9,
+        "the scale expansions raised E from {last} to {}",
+        report.expansion_energy
+    );
+    assert_eq!(report.expansions == 0, report.expanded_pieces == 0);
     for (bound, energy) in report.lower_bounds.iter().zip(&report.energies[1..]) {
         assert!(
             bound <= energy,

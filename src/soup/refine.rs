@@ -24,7 +24,11 @@
 //! neighbour's motion with a camera-facing plane at their boundary's depth), and Gaussian
 //! perturbations of its scale and plane that shrink over the iterations — tabulates the unary
 //! and the P×P pairwise costs, and takes the TRW-S labelling when it lowers E. After each
-//! iteration the median scale is reset to 1 (E ignores the global scale). At the end, a depth
+//! iteration the median scale is reset to 1 (E ignores the global scale). Then scale
+//! expansions move clusters of pieces whose depth is a guess together: every such piece is
+//! offered its state or its scale × f at once, TRW-S labels that binary MRF, and a move is kept
+//! when it lowers E without raising the scale solve's energy (`expand_scales`; the particles
+//! alone cannot move a cluster held by its own inner contacts). At the end, a depth
 //! tail control gives pieces placed more than `max_depth_ratio` from the median depth a
 //! neighbour's motion and a camera-facing plane at their shared boundary's depth.
 
@@ -35,7 +39,8 @@ use super::ground;
 use super::init::sample_correspondences;
 use super::plane::mean_transfer_px;
 use super::scales::{
-    self, RayPoint, ScaleInputs, ScaleParams, TruncatedGaps, pair_weight, sampled_pairs,
+    self, RayPoint, ScaleEnergy, ScaleInputs, ScaleParams, TruncatedGaps, pair_weight,
+    sampled_pairs,
 };
 use super::{Piece, Soup};
 use crate::geometry::essential::Motion;
@@ -77,6 +82,16 @@ pub struct RefineParams {
     /// neighbour's plane that sinks it again (the street with preset medium: one piece 4.6×
     /// too deep held a fifth of the error). 0 switches it off.
     pub ground_weight: f64,
+    /// Rounds of scale expansions after the particle iterations (module docs; 0 turns
+    /// them off).
+    pub expansion_rounds: usize,
+    /// The expansions' factors, each tried as a shrink f and a growth 1/f, in this order:
+    /// halving first (the creature's walker sat at 0.48 of its depth), then the factors around
+    /// it. Factors nearer 1 (0.8, 1.25) let parts of the static room slide (0.0086 → 0.0108).
+    pub expansion_factors: [f64; 4],
+    /// Fewest connected pieces an expansion moves together; smaller groups stay (1–5 pieces of
+    /// the street's cars flipped by 2.5× on noise in their truncated contacts: +0.004 there).
+    pub expansion_min_group: usize,
     /// Seed of the perturbations.
     pub seed: u64,
 }
@@ -94,6 +109,9 @@ impl Default for RefineParams {
             trws_passes: 10,
             max_depth_ratio: 30.0,
             ground_weight: 3.0,
+            expansion_rounds: 1,
+            expansion_factors: [0.5, 0.4, 0.6, 0.7],
+            expansion_min_group: 8,
             seed: 2017,
         }
     }
@@ -117,6 +135,12 @@ pub struct RefineReport {
     pub energies: Vec<f64>,
     /// TRW-S lower bound of each iteration's particle MRF.
     pub lower_bounds: Vec<f64>,
+    /// Scale expansions kept (module docs).
+    pub expansions: usize,
+    /// Pieces those expansions moved, counted once per expansion.
+    pub expanded_pieces: usize,
+    /// E after the expansions (the last of `energies` when none was kept).
+    pub expansion_energy: f64,
     /// Pieces moved by the depth tail control.
     pub tail_pieces: usize,
 }
@@ -143,6 +167,8 @@ pub struct Problem {
     /// The static world's ground, if one is in view.
     ground: Option<Ground>,
     params: RefineParams,
+    /// The static world's well-measured pieces ([`scales::world_pieces`]).
+    world: Vec<usize>,
 }
 
 /// The static world's ground plane and what carries its scale.
@@ -217,15 +243,17 @@ impl Problem {
                 weights,
             });
         }
-        let world = scales::world_pieces(soup, inputs, scale_params.world_parallax);
+        let is_world = scales::world_pieces(soup, inputs, scale_params.world_parallax);
+        let world: Vec<usize> = (0..is_world.len()).filter(|&i| is_world[i]).collect();
         let ground = (params.ground_weight > 0.0 && scale_params.ground_weight > 0.0)
-            .then(|| ground::ground_plane(soup, sp, k, &world, scale_params.ground_share))
+            .then(|| ground::ground_plane(soup, sp, k, &is_world, scale_params.ground_share))
             .flatten()
             .map(|plane| Ground {
                 plane,
-                world: (0..world.len()).filter(|&i| world[i]).collect(),
+                world: world.clone(),
             });
         Problem {
+            world,
             ground,
             extent_rays: sp
                 .segments
@@ -369,7 +397,12 @@ pub struct EnergyTerms {
 }
 
 /// Refines `soup` in place and reports the energies.
-pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
+pub fn refine(
+    soup: &mut Soup,
+    problem: &Problem,
+    inputs: &ScaleInputs,
+    scale_params: &ScaleParams,
+) -> RefineReport {
     let params = problem.params;
     let mut energies = vec![problem.energy(soup)];
     let mut lower_bounds = Vec::new();
@@ -424,11 +457,222 @@ pub fn refine(soup: &mut Soup, problem: &Problem) -> RefineReport {
         }
         energies.push(energy);
     }
+    let (expansions, expanded_pieces) = expand_scales(soup, problem, inputs, scale_params);
+    let expansion_energy = problem.energy(soup);
     let tail_pieces = depth_tail_control(soup, problem);
     RefineReport {
         energies,
         lower_bounds,
+        expansions,
+        expanded_pieces,
+        expansion_energy,
         tail_pieces,
+    }
+}
+
+/// Scale expansions after the particle iterations (ours; not in the paper). The particles move
+/// one piece at a time, so a cluster of pieces placed together at a wrong scale (a walker at
+/// half its depth, held by its own inner contacts) cannot leave it: any one piece alone would
+/// break its contacts with the rest. An expansion offers every piece at once its state or its
+/// state with λ multiplied by a factor f (its homography, so E_proj, unchanged: both frames'
+/// depths scale together), and TRW-S picks the labelling, as in α-expansion. Each factor of
+/// `expansion_factors` is tried as a shrink f and as a growth 1/f, for `expansion_rounds`
+/// rounds. Only pieces whose depth is a guess take part ([`guessed_pieces`]). A move is kept
+/// when
+///
+/// - it lowers E, counting only the groups of at least `expansion_min_group` connected pieces
+///   it moves (smaller ones stay: single pieces are the particles' business, and a few pieces
+///   at a depth edge flipping by 2× ride on noise in truncated contacts);
+/// - and it does not raise the scale solve's energy at the new scales ([`ScaleEnergy`]:
+///   its per-piece contacts, its segments' contacts, static, rest, figure and ground priors): the
+///   refinement's energy does not know the scale solve's priors, and alone took the table's
+///   and the road's static world to wrong scales (docs/RESULTS.md, Stop 38).
+///
+/// Returns how many moves were kept and how many pieces they moved in all.
+fn expand_scales(
+    soup: &mut Soup,
+    problem: &Problem,
+    inputs: &ScaleInputs,
+    scale_params: &ScaleParams,
+) -> (usize, usize) {
+    let params = &problem.params;
+    let movable = guessed_pieces(soup, problem, inputs, scale_params);
+    // Nothing to do without a connected group of guesses large enough to move.
+    let mut groups: Vec<usize> = movable.iter().map(|&m| usize::from(m)).collect();
+    drop_small_groups(&mut groups, &problem.neighbours, params.expansion_min_group);
+    if groups.iter().all(|&g| g == 0) {
+        return (0, 0);
+    }
+    let movable: Vec<bool> = groups.iter().map(|&g| g == 1).collect();
+    let log_scales =
+        |pieces: &[Piece]| -> Vec<f64> { pieces.iter().map(|p| ln(p.lambda)).collect() };
+    // The scale energy and its value at the current scales, built at the first move that lowers
+    // E (expansions change scales only, so its contacts and segments stay valid).
+    let mut scale: Option<(ScaleEnergy, f64)> = None;
+    let (mut moves, mut moved) = (0, 0);
+    for _ in 0..params.expansion_rounds {
+        for &f in &params.expansion_factors {
+            for factor in [f, 1.0 / f] {
+                let previous = soup.pieces.clone();
+                let count = expansion(soup, problem, &movable, factor);
+                if count == 0 {
+                    continue;
+                }
+                let (energy, current) = scale.get_or_insert_with(|| {
+                    let energy = ScaleEnergy::new(soup, inputs, scale_params);
+                    let current = energy.total(&log_scales(&previous));
+                    (energy, current)
+                });
+                let after = energy.total(&log_scales(&soup.pieces));
+                if after > *current {
+                    soup.pieces = previous;
+                    continue;
+                }
+                *current = after;
+                moves += 1;
+                moved += count;
+            }
+        }
+    }
+    (moves, moved)
+}
+
+/// Per piece, whether its depth is a guess that an expansion may move: its depth confidence
+/// is below `scales.min_confidence` (no contact pins its scale, or its plane is borrowed) and
+/// it is not one of the static world's well-measured pieces still on the ego-motion (their
+/// depth is the ego-motion's triangulation at the world's scale). Measured: letting pinned
+/// pieces move too took half of the table's static world to half its scale on one seed (0.024
+/// → 0.125) and FlyingThings3D's background with two objects to twice (0.32 → 0.42), each at a
+/// lower energy than the solution's.
+fn guessed_pieces(
+    soup: &Soup,
+    problem: &Problem,
+    inputs: &ScaleInputs,
+    scale_params: &ScaleParams,
+) -> Vec<bool> {
+    let confidence = scales::depth_confidence(soup, inputs, scale_params);
+    let mut movable: Vec<bool> = confidence
+        .iter()
+        .map(|&c| c < scale_params.min_confidence)
+        .collect();
+    for &i in &problem.world {
+        movable[i] &= soup.pieces[i].hypothesis != 0;
+    }
+    movable
+}
+
+/// One expansion by `factor` of the `movable` pieces (see [`expand_scales`]), kept when it
+/// lowers E. Returns how many pieces it moved (0 when it was not kept).
+fn expansion(soup: &mut Soup, problem: &Problem, movable: &[bool], factor: f64) -> usize {
+    // The MRF holds the movable pieces only; a contact with a piece that keeps its state adds
+    // its cost to the movable side's unary.
+    let nodes: Vec<usize> = (0..movable.len()).filter(|&i| movable[i]).collect();
+    let mut node_of = vec![usize::MAX; movable.len()];
+    for (n, &i) in nodes.iter().enumerate() {
+        node_of[i] = n;
+    }
+    let states = |i: usize| -> Vec<Piece> {
+        let p = soup.pieces[i];
+        if movable[i] {
+            vec![
+                p,
+                Piece {
+                    lambda: p.lambda * factor,
+                    ..p
+                },
+            ]
+        } else {
+            vec![p]
+        }
+    };
+    let ground_scale = problem.ground.as_ref().map_or(1.0, |g| g.scale(soup));
+    let mut unary: Vec<Vec<f64>> = nodes
+        .iter()
+        .map(|&i| {
+            states(i)
+                .iter()
+                .map(|p| problem.ground_cost(i, p, ground_scale))
+                .collect()
+        })
+        .collect();
+    let mut edges = Vec::new();
+    for c in &problem.contacts {
+        match (movable[c.a], movable[c.b]) {
+            (true, true) => edges.push((c, problem.contact_table(c, &states(c.a), &states(c.b)))),
+            (true, false) => {
+                let table = problem.contact_table(c, &states(c.a), &states(c.b));
+                let u = &mut unary[node_of[c.a]];
+                u.iter_mut().zip(&table).for_each(|(u, t)| *u += t);
+            }
+            (false, true) => {
+                let table = problem.contact_table(c, &states(c.a), &states(c.b));
+                let u = &mut unary[node_of[c.b]];
+                u.iter_mut().zip(&table).for_each(|(u, t)| *u += t);
+            }
+            (false, false) => {}
+        }
+    }
+    let mut mrf = Mrf::new(unary);
+    for (c, table) in edges {
+        mrf.add_edge(node_of[c.a], node_of[c.b], table);
+    }
+    let options = TrwsOptions {
+        iterations: problem.params.trws_passes,
+    };
+    let node_labels = trws(&mrf, &options).labels;
+    let mut labels = vec![0; movable.len()];
+    for (&i, &l) in nodes.iter().zip(&node_labels) {
+        labels[i] = l;
+    }
+    drop_small_groups(
+        &mut labels,
+        &problem.neighbours,
+        problem.params.expansion_min_group,
+    );
+    let kept: Vec<usize> = nodes.iter().map(|&i| labels[i]).collect();
+    let count = kept.iter().filter(|&&l| l == 1).count();
+    if count == 0 || mrf.energy(&kept) >= mrf.energy(&vec![0; kept.len()]) {
+        return 0;
+    }
+    let before = problem.energy(soup);
+    let previous = soup.pieces.clone();
+    for (piece, &l) in soup.pieces.iter_mut().zip(&labels) {
+        if l == 1 {
+            piece.lambda *= factor;
+        }
+    }
+    let log_scales: Vec<f64> = soup.pieces.iter().map(|p| ln(p.lambda)).collect();
+    scales::set_scales(soup, &log_scales);
+    if problem.energy(soup) >= before {
+        soup.pieces = previous;
+        return 0;
+    }
+    count
+}
+
+/// Sets to 0 the labels of every connected group (through `neighbours`) of pieces labelled 1
+/// that has fewer than `min_group` pieces.
+fn drop_small_groups(labels: &mut [usize], neighbours: &[Vec<(usize, usize)>], min_group: usize) {
+    let mut seen = vec![false; labels.len()];
+    for start in 0..labels.len() {
+        if seen[start] || labels[start] != 1 {
+            continue;
+        }
+        seen[start] = true;
+        let mut stack = vec![start];
+        let mut group = Vec::new();
+        while let Some(i) = stack.pop() {
+            group.push(i);
+            for &(k, _) in &neighbours[i] {
+                if !seen[k] && labels[k] == 1 {
+                    seen[k] = true;
+                    stack.push(k);
+                }
+            }
+        }
+        if group.len() < min_group {
+            group.iter().for_each(|&i| labels[i] = 0);
+        }
     }
 }
 
@@ -594,6 +838,7 @@ mod tests {
             truncation,
             ground: None,
             params: RefineParams::default(),
+            world: Vec::new(),
         };
         let a: Vec<Piece> = (0..9).map(|k| state(&mut rng, k)).collect();
         let b: Vec<Piece> = (0..7).map(|k| state(&mut rng, k + 1)).collect();
@@ -633,5 +878,124 @@ mod tests {
         let sum = terms.proj + terms.contacts + terms.ground;
         assert!(terms.contacts > 0.0);
         assert!((sum - problem.energy(&soup)).abs() < 1e-12);
+    }
+
+    #[test]
+    fn expansions_leave_groups_smaller_than_the_minimum_where_they_are() {
+        // A chain 0-1-2-3-4 and a pair 5-6; pieces 0, 1, 2, 5 and 6 are labelled to move.
+        let mut neighbours = vec![Vec::new(); 7];
+        for (c, (a, b)) in [(0, 1), (1, 2), (2, 3), (3, 4), (5, 6)]
+            .into_iter()
+            .enumerate()
+        {
+            neighbours[a].push((b, c));
+            neighbours[b].push((a, c));
+        }
+        let moved = [1, 1, 1, 0, 0, 1, 1];
+        let mut labels = moved.to_vec();
+        drop_small_groups(&mut labels, &neighbours, 3);
+        assert_eq!(labels, [1, 1, 1, 0, 0, 0, 0]);
+        let mut labels = moved.to_vec();
+        drop_small_groups(&mut labels, &neighbours, 4);
+        assert_eq!(labels, [0; 7]);
+        let mut labels = moved.to_vec();
+        drop_small_groups(&mut labels, &neighbours, 1);
+        assert_eq!(labels, moved);
+    }
+
+    /// Ten pieces in a row, each touching the next through three rays: planes facing the
+    /// camera at unit-scale depth 5, all moving by one translation; pieces 5–9 at twice the
+    /// scale of 0–4 (a cluster placed together at a wrong scale).
+    fn row_with_a_far_cluster() -> (Soup, Problem) {
+        let piece = |lambda| Piece {
+            r: nalgebra::Matrix3::identity(),
+            t_hat: Vector3::new(1.0, 0.0, 0.0),
+            m: Vector3::new(0.0, 0.0, 0.2),
+            lambda,
+            hypothesis: 1,
+            degenerate: None,
+        };
+        let pieces: Vec<Piece> = (0..10)
+            .map(|i| piece(if i < 5 { 1.0 } else { 2.0 }))
+            .collect();
+        let mut neighbours = vec![Vec::new(); 10];
+        let mut contacts = Vec::new();
+        for a in 0..9 {
+            let x = -0.5 + 0.1 * a as f64;
+            let rays = (0..3)
+                .map(|k| Vector3::new(x, 0.1 * k as f64, 1.0))
+                .collect();
+            neighbours[a].push((a + 1, contacts.len()));
+            neighbours[a + 1].push((a, contacts.len()));
+            contacts.push(Contact {
+                a,
+                b: a + 1,
+                rays,
+                weights: vec![1.0 / 3.0; 3],
+            });
+        }
+        let problem = Problem {
+            samples: vec![Vec::new(); 10],
+            extent_rays: Vec::new(),
+            contacts,
+            neighbours,
+            focal: 1.0,
+            truncation: TruncatedGaps::new(0.1),
+            ground: None,
+            params: RefineParams::default(),
+            world: Vec::new(),
+        };
+        let soup = Soup {
+            pieces,
+            hypotheses: Vec::new(),
+            noise_px: 0.1,
+        };
+        (soup, problem)
+    }
+
+    #[test]
+    fn an_expansion_moves_a_cluster_of_guesses_back_to_the_scale_its_contacts_say() {
+        let (mut soup, mut problem) = row_with_a_far_cluster();
+        problem.params.expansion_min_group = 5;
+        let before = problem.energy(&soup);
+        let movable = vec![true; 10];
+        // Doubling the near half (E does not see the global scale) closes the gap.
+        let moved = expansion(&mut soup, &problem, &movable, 2.0);
+        assert_eq!(moved, 5, "one side of the row moves as a whole");
+        let after = problem.energy(&soup);
+        assert!(after < before - 0.1, "E {before} -> {after}");
+        let ratio = soup.pieces[9].lambda / soup.pieces[0].lambda;
+        assert!(
+            (ratio - 1.0).abs() < 1e-9,
+            "scale ratio across the row {ratio}"
+        );
+        // Once the row is one surface no expansion lowers E.
+        for factor in [0.5, 2.0, 0.7] {
+            assert_eq!(expansion(&mut soup, &problem, &movable, factor), 0);
+        }
+    }
+
+    #[test]
+    fn an_expansion_leaves_pinned_pieces_and_small_groups_alone() {
+        let (soup, mut problem) = row_with_a_far_cluster();
+        // Only the far cluster's pieces are guesses, but a group of 5 is below the minimum.
+        problem.params.expansion_min_group = 6;
+        let far: Vec<bool> = (0..10).map(|i| i >= 5).collect();
+        let mut moved = soup.clone();
+        assert_eq!(expansion(&mut moved, &problem, &far, 0.5), 0);
+        assert_eq!(moved.pieces, soup.pieces);
+        // Nothing may move: nothing does.
+        problem.params.expansion_min_group = 1;
+        let mut pinned = soup.clone();
+        assert_eq!(expansion(&mut pinned, &problem, &[false; 10], 0.5), 0);
+        assert_eq!(pinned.pieces, soup.pieces);
+        // With the near half pinned, the far cluster itself comes back.
+        let mut free = soup.clone();
+        assert_eq!(expansion(&mut free, &problem, &far, 0.5), 5);
+        let ratio = free.pieces[9].lambda / free.pieces[0].lambda;
+        assert!(
+            (ratio - 1.0).abs() < 1e-9,
+            "scale ratio across the row {ratio}"
+        );
     }
 }

@@ -952,22 +952,54 @@ pub fn segment_objective(
     params: &ScaleParams,
     s: &[f64],
 ) -> SegmentObjective {
-    let problem = build_problem(soup, inputs, params);
-    let segments = Segments::new(soup, inputs, &problem, params);
-    let u = segments.offsets_of(s);
-    let pairs = segment_pair_terms(&problem, &segments, params);
-    let sigma = problem.sigma;
-    let mut out = SegmentObjective {
-        contacts: 0.0,
-        figure: 0.0,
-        ground: 0.0,
-    };
-    for (&(g, h), pair) in &pairs {
-        out.contacts += truncated(&pair.terms, u[g] - u[h], sigma);
-        out.figure += steps_at(&pair.behind, u[g] - u[h], sigma);
-        out.ground += steps_at(&pair.under, u[g] - u[h], sigma);
+    ScaleEnergy::new(soup, inputs, params).segments(s)
+}
+
+/// The scale solve's energy of per-piece log-scales for one soup's planes and motions: the
+/// per-piece contacts of [`build_problem`] plus the [`SegmentObjective`]. Neither the contacts
+/// nor the segments depend on the scales, so it is built once and scores many scalings.
+pub struct ScaleEnergy {
+    problem: Problem,
+    segments: Segments,
+    pairs: PairTerms,
+}
+
+impl ScaleEnergy {
+    /// The energy for `soup`'s planes and motions.
+    pub fn new(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams) -> Self {
+        let problem = build_problem(soup, inputs, params);
+        let segments = Segments::new(soup, inputs, &problem, params);
+        let pairs = segment_pair_terms(&problem, &segments, params);
+        ScaleEnergy {
+            problem,
+            segments,
+            pairs,
+        }
     }
-    out
+
+    /// The segment objective at per-piece log-scales `s` (each segment at the median offset of
+    /// its pieces).
+    pub fn segments(&self, s: &[f64]) -> SegmentObjective {
+        let u = self.segments.offsets_of(s);
+        let sigma = self.problem.sigma;
+        let mut out = SegmentObjective {
+            contacts: 0.0,
+            figure: 0.0,
+            ground: 0.0,
+        };
+        for (&(g, h), pair) in &self.pairs {
+            out.contacts += truncated(&pair.terms, u[g] - u[h], sigma);
+            out.figure += steps_at(&pair.behind, u[g] - u[h], sigma);
+            out.ground += steps_at(&pair.under, u[g] - u[h], sigma);
+        }
+        out
+    }
+
+    /// The whole energy at `s`: per-piece contacts plus every term of the segment objective.
+    pub fn total(&self, s: &[f64]) -> f64 {
+        let segments = self.segments(s);
+        self.problem.energy(s) + segments.contacts + segments.figure + segments.ground
+    }
 }
 
 /// The pieces of the static world whose depth their own flow measures well: on the ego-motion

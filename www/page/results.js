@@ -70,7 +70,7 @@ function fillSummary(report) {
     ['Scale energy', `${report.scales.energy_start.toPrecision(4)} → ${report.scales.energy_end.toPrecision(4)} (${report.scales.segments} rigid segments, ${report.scales.tail_pieces} superpixels taken from their neighbours)`],
     ['Refinement energy', report.refine === null
       ? 'off'
-      : `${report.refine.energies[0].toPrecision(4)} → ${report.refine.energies.at(-1).toPrecision(4)} in ${report.refine.energies.length - 1} iterations`],
+      : `${report.refine.energies[0].toPrecision(4)} → ${report.refine.energies.at(-1).toPrecision(4)} in ${report.refine.energies.length - 1} iterations, ${report.refine.expansion_energy.toPrecision(4)} after ${report.refine.expansions} scale expansions`],
     ['Depth guessed', `${report.unconfident} superpixels (no contact pins their scale, or they had too little trusted flow for a plane of their own: their depth relative to the rest is a guess)`],
   ];
   for (const note of report.notes) {

@@ -431,7 +431,7 @@ fn print_truth_test(rec: &Reconstruction, case: &Case) -> Result<()> {
                 .flatten()
             {
                 if !suffix.is_empty() {
-                    refine::refine(&mut soup, &refine_problem);
+                    refine::refine(&mut soup, &refine_problem, &inputs, &params.scales);
                 }
                 let terms = refine_problem.energy_terms(&soup);
                 println!(
