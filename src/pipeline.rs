@@ -277,6 +277,13 @@ pub fn reconstruct(
             ensemble.members, ensemble.count_step
         )));
     }
+    let factors = params.refine.expansion_factors;
+    if !factors.iter().all(|f| *f > 0.0 && *f < 1.0) {
+        return Err(Error::InvalidParameter(format!(
+            "refine.expansion_factors {factors:?}: each must lie strictly between 0 and 1 (it is \
+             tried as a shrink f and a growth 1/f)"
+        )));
+    }
     let mut rec = match flow {
         FlowInput::Given(given) => {
             reconstruct_from(pair, FlowInput::Given(given), params, None, progress)

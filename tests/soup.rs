@@ -148,6 +148,48 @@ fn contacts_recover_the_relative_scale_of_two_bodies() {
 }
 
 #[test]
+fn the_scale_energy_ignores_the_global_scale_and_rises_when_a_body_leaves_its_contact() {
+    // What the refinement's scale expansions answer to: the solved two bodies score lower than
+    // the same soup with body B moved to twice its scale, whatever the global scale.
+    let delta = Vector3::new(0.0, 0.0, -0.3);
+    let params = ScaleParams::default();
+    let (soup, _) = solve_two_bodies(delta, &params);
+    let (_, sp) = two_body_soup(delta);
+    let frame = Grid::filled(100, 100, [128u8, 128, 128]);
+    let boundaries = boundary_graph(&sp, &frame);
+    let flow = two_body_flow(delta);
+    let reliable = Grid::filled(100, 100, true);
+    let inputs = ScaleInputs {
+        superpixels: &sp,
+        boundaries: &boundaries,
+        flow: &flow,
+        reliable: &reliable,
+        intrinsics: &K,
+    };
+    let energy = scales::ScaleEnergy::new(&soup, &inputs, &params);
+    let solved: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
+    let shifted: Vec<f64> = solved.iter().map(|s| s + 0.7).collect();
+    let apart: Vec<f64> = solved
+        .iter()
+        .enumerate()
+        .map(|(i, s)| if i % 10 < 5 { *s } else { s + 2f64.ln() })
+        .collect();
+    let at = |s: &[f64]| energy.total(s);
+    assert!((at(&solved) - at(&shifted)).abs() < 1e-9);
+    assert!(
+        at(&apart) > at(&solved) + 0.1,
+        "solved {} apart {}",
+        at(&solved),
+        at(&apart)
+    );
+    let segments = energy.segments(&solved);
+    assert_eq!(
+        segments,
+        scales::segment_objective(&soup, &inputs, &params, &solved)
+    );
+}
+
+#[test]
 fn the_static_world_is_one_segment_where_its_parallax_measures_depth() {
     // Both halves are static (the camera's motion, hypothesis 0). The right half's plane lies
     // 10 % nearer than the left's (z = 10 / 1.1): a log-depth gap of 0.095 where they touch,
@@ -772,7 +814,7 @@ fn the_table_s_objects_stand_on_it_where_the_floor_lies_in_front_of_their_bottom
 }
 
 #[test]
-fn fusion_settings_outside_their_range_are_refused() {
+fn fusion_and_expansion_settings_outside_their_range_are_refused() {
     // Checked before any work: a guess weighs between nothing and what a pinned depth weighs,
     // and at most 15 members are fused.
     let s = render(SceneKind::Flag, 64, 32).unwrap();
@@ -796,4 +838,13 @@ fn fusion_settings_outside_their_range_are_refused() {
     let mut params = Params::default();
     params.ensemble.members = 16;
     assert!(matches!(run(&params), Err(Error::InvalidParameter(_))));
+    // A scale expansion's factor is a shrink in (0, 1), also tried as the growth 1/f.
+    for bad in [0.0, 1.0, 2.0, -0.5, f64::NAN] {
+        let mut params = Params::default();
+        params.refine.expansion_factors[2] = bad;
+        assert!(
+            matches!(run(&params), Err(Error::InvalidParameter(m)) if m.contains("expansion_factors")),
+            "{bad}"
+        );
+    }
 }

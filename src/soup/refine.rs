@@ -477,14 +477,15 @@ pub fn refine(
 /// state with λ multiplied by a factor f (its homography, so E_proj, unchanged: both frames'
 /// depths scale together), and TRW-S picks the labelling, as in α-expansion. Each factor of
 /// `expansion_factors` is tried as a shrink f and as a growth 1/f, for `expansion_rounds`
-/// rounds. Only pieces whose depth is a guess take part ([`guessed_pieces`]). A move is kept
+/// rounds. Only pieces whose depth is a guess take part ([`guessed_pieces`], decided once,
+/// before the first expansion: a piece moved stays movable). A move is kept
 /// when
 ///
 /// - it lowers E, counting only the groups of at least `expansion_min_group` connected pieces
 ///   it moves (smaller ones stay: single pieces are the particles' business, and a few pieces
 ///   at a depth edge flipping by 2× ride on noise in truncated contacts);
-/// - and it does not raise the scale solve's energy at the new scales ([`ScaleEnergy`]:
-///   its per-piece contacts, its segments' contacts, static, rest, figure and ground priors): the
+/// - and it does not raise the scale solve's energy at the new scales ([`ScaleEnergy`]: its
+///   per-piece contacts plus its segments' contacts, static, rest, figure and ground priors): the
 ///   refinement's energy does not know the scale solve's priors, and alone took the table's
 ///   and the road's static world to wrong scales (docs/RESULTS.md, Stop 38).
 ///

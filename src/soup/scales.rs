@@ -955,9 +955,12 @@ pub fn segment_objective(
     ScaleEnergy::new(soup, inputs, params).segments(s)
 }
 
-/// The scale solve's energy of per-piece log-scales for one soup's planes and motions: the
-/// per-piece contacts of [`build_problem`] plus the [`SegmentObjective`]. Neither the contacts
-/// nor the segments depend on the scales, so it is built once and scores many scalings.
+/// The scale solve's two views of per-piece log-scales for one soup's planes and motions, added:
+/// the per-piece contacts of [`build_problem`] (what the polish descends) plus the
+/// [`SegmentObjective`] (what the segment solve minimises, each segment at the median of its
+/// pieces). A contact between two segments counts in both views, one inside a segment in the
+/// first only, the priors in the second only. Neither the contacts nor the segments depend on
+/// the scales, so it is built once and scores many scalings.
 pub struct ScaleEnergy {
     problem: Problem,
     segments: Segments,
