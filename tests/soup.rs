@@ -16,7 +16,7 @@ use superpixel_soup::soup::scales::{
     self, ScaleInputs, ScaleParams, ScaleReport, build_problem, rigid_segments, solve_scales,
 };
 use superpixel_soup::soup::{Piece, Soup};
-use superpixel_soup::superpixels::graph::boundary_graph;
+use superpixel_soup::superpixels::graph::{BoundaryGraph, boundary_graph};
 use superpixel_soup::superpixels::{Segment, Superpixels};
 use superpixel_soup::synth::{SceneKind, SynthScene, render};
 use superpixel_soup::{Error, FlowInput, Params, Reconstruction, reconstruct};
@@ -94,23 +94,47 @@ fn two_body_flow(delta: Vector3<f64>) -> Grid<[f32; 2]> {
     })
 }
 
+/// What the scale solve reads besides a two-body soup: its superpixels, their boundary graph
+/// (on a grey frame: no colour edges), the exact flow and every vector trusted.
+struct TwoBodyInputs {
+    sp: Superpixels,
+    boundaries: BoundaryGraph,
+    flow: Grid<[f32; 2]>,
+    reliable: Grid<bool>,
+}
+
+impl TwoBodyInputs {
+    fn new(sp: Superpixels, delta: Vector3<f64>) -> Self {
+        let frame = Grid::filled(100, 100, [128u8, 128, 128]);
+        TwoBodyInputs {
+            boundaries: boundary_graph(&sp, &frame),
+            sp,
+            flow: two_body_flow(delta),
+            reliable: Grid::filled(100, 100, true),
+        }
+    }
+
+    fn scale_inputs(&self) -> ScaleInputs<'_> {
+        ScaleInputs {
+            superpixels: &self.sp,
+            boundaries: &self.boundaries,
+            flow: &self.flow,
+            reliable: &self.reliable,
+            intrinsics: &K,
+        }
+    }
+}
+
 /// [`two_body_soup`] with its scales solved by `params` from the contacts along the bodies'
-/// shared boundary, and the solve's report.
-fn solve_two_bodies(delta: Vector3<f64>, params: &ScaleParams) -> (Soup, ScaleReport) {
+/// shared boundary, the solve's report and the solve's inputs.
+fn solve_two_bodies(
+    delta: Vector3<f64>,
+    params: &ScaleParams,
+) -> (Soup, ScaleReport, TwoBodyInputs) {
     let (mut soup, sp) = two_body_soup(delta);
-    let frame = Grid::filled(100, 100, [128u8, 128, 128]);
-    let boundaries = boundary_graph(&sp, &frame);
-    let flow = two_body_flow(delta);
-    let reliable = Grid::filled(100, 100, true);
-    let inputs = ScaleInputs {
-        superpixels: &sp,
-        boundaries: &boundaries,
-        flow: &flow,
-        reliable: &reliable,
-        intrinsics: &K,
-    };
-    let report = solve_scales(&mut soup, &inputs, params);
-    (soup, report)
+    let inputs = TwoBodyInputs::new(sp, delta);
+    let report = solve_scales(&mut soup, &inputs.scale_inputs(), params);
+    (soup, report, inputs)
 }
 
 /// λ_B / λ_A of a solved two-body soup, after checking each body kept one scale.
@@ -136,7 +160,7 @@ fn body_ratio(soup: &Soup) -> f64 {
 fn contacts_recover_the_relative_scale_of_two_bodies() {
     // Body B drifts slightly towards the camera while the camera translates sideways.
     let delta = Vector3::new(0.0, 0.0, -0.3);
-    let (soup, report) = solve_two_bodies(delta, &ScaleParams::default());
+    let (soup, report, _) = solve_two_bodies(delta, &ScaleParams::default());
     let ratio = body_ratio(&soup);
     let truth = (Vector3::new(1.0, 0.0, 0.0) + delta).norm();
     assert!(
@@ -153,19 +177,8 @@ fn the_scale_energy_ignores_the_global_scale_and_rises_when_a_body_leaves_its_co
     // the same soup with body B moved to twice its scale, whatever the global scale.
     let delta = Vector3::new(0.0, 0.0, -0.3);
     let params = ScaleParams::default();
-    let (soup, _) = solve_two_bodies(delta, &params);
-    let (_, sp) = two_body_soup(delta);
-    let frame = Grid::filled(100, 100, [128u8, 128, 128]);
-    let boundaries = boundary_graph(&sp, &frame);
-    let flow = two_body_flow(delta);
-    let reliable = Grid::filled(100, 100, true);
-    let inputs = ScaleInputs {
-        superpixels: &sp,
-        boundaries: &boundaries,
-        flow: &flow,
-        reliable: &reliable,
-        intrinsics: &K,
-    };
+    let (soup, _, two_bodies) = solve_two_bodies(delta, &params);
+    let inputs = two_bodies.scale_inputs();
     let energy = scales::ScaleEnergy::new(&soup, &inputs, &params);
     let solved: Vec<f64> = soup.pieces.iter().map(|p| p.lambda.ln()).collect();
     let shifted: Vec<f64> = solved.iter().map(|s| s + 0.7).collect();
@@ -206,17 +219,8 @@ fn the_static_world_is_one_segment_where_its_parallax_measures_depth() {
     };
     set_right_plane(&mut soup, 0.11);
     soup.hypotheses.truncate(1);
-    let frame = Grid::filled(100, 100, [128u8, 128, 128]);
-    let boundaries = boundary_graph(&sp, &frame);
-    let flow = two_body_flow(Vector3::zeros());
-    let reliable = Grid::filled(100, 100, true);
-    let inputs = ScaleInputs {
-        superpixels: &sp,
-        boundaries: &boundaries,
-        flow: &flow,
-        reliable: &reliable,
-        intrinsics: &K,
-    };
+    let two_bodies = TwoBodyInputs::new(sp, Vector3::zeros());
+    let inputs = two_bodies.scale_inputs();
     let params = ScaleParams::default();
     let segments_with = |soup: &Soup| {
         let problem = build_problem(soup, &inputs, &params);
@@ -643,7 +647,7 @@ fn scale_band_is_centred_on_equal_median_depths() {
             band,
             ..ScaleParams::default()
         };
-        let (soup, _) = solve_two_bodies(Vector3::new(-0.95, 0.0, 0.0), &params);
+        let (soup, _, _) = solve_two_bodies(Vector3::new(-0.95, 0.0, 0.0), &params);
         let ray = Vector3::new(0.0, 0.0, 1.0);
         let ratio = soup.pieces[5].depth(&ray) / soup.pieces[0].depth(&ray);
         assert!(

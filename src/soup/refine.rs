@@ -164,29 +164,13 @@ pub struct Problem {
     focal: f64,
     /// The contact costs at the scale solve's σ.
     truncation: TruncatedGaps,
-    /// The static world's ground, if one is in view.
-    ground: Option<Ground>,
+    /// The static world's ground plane, if one is in view: at the unit scale of the ego-motion
+    /// (depth 1 / (mᵀx̄)), fitted by [`ground::ground_plane`] to the `world` pieces; it lies at
+    /// their median scale ([`Problem::ground_scale`]).
+    ground: Option<Vector3<f64>>,
     params: RefineParams,
     /// The static world's well-measured pieces ([`scales::world_pieces`]).
     world: Vec<usize>,
-}
-
-/// The static world's ground plane and what carries its scale.
-struct Ground {
-    /// The plane at the unit scale of the ego-motion (depth 1 / (mᵀx̄)), fitted by
-    /// [`ground::ground_plane`] to the well-measured pieces of the static world.
-    plane: Vector3<f64>,
-    /// Those pieces: the ground lies at their median scale λ.
-    world: Vec<usize>,
-}
-
-impl Ground {
-    /// The ground's scale in `soup`: the median λ of the world pieces.
-    fn scale(&self, soup: &Soup) -> f64 {
-        let mut lambdas: Vec<f64> = self.world.iter().map(|&i| soup.pieces[i].lambda).collect();
-        lambdas.sort_by(f64::total_cmp);
-        lambdas.get(lambdas.len() / 2).copied().unwrap_or(1.0)
-    }
 }
 
 /// Where each of `states` meets each of `rays`, ray by ray: element `r · states.len() + k` is
@@ -247,11 +231,7 @@ impl Problem {
         let world: Vec<usize> = (0..is_world.len()).filter(|&i| is_world[i]).collect();
         let ground = (params.ground_weight > 0.0 && scale_params.ground_weight > 0.0)
             .then(|| ground::ground_plane(soup, sp, k, &is_world, scale_params.ground_share))
-            .flatten()
-            .map(|plane| Ground {
-                plane,
-                world: world.clone(),
-            });
+            .flatten();
         Problem {
             world,
             ground,
@@ -306,15 +286,22 @@ impl Problem {
         self.params.proj_weight * cost
     }
 
+    /// The ground's scale in `soup`: the median λ of the world pieces.
+    fn ground_scale(&self, soup: &Soup) -> f64 {
+        let mut lambdas: Vec<f64> = self.world.iter().map(|&i| soup.pieces[i].lambda).collect();
+        lambdas.sort_by(f64::total_cmp);
+        lambdas.get(lambdas.len() / 2).copied().unwrap_or(1.0)
+    }
+
     /// The ground's cost of piece `i` in state `piece` with the ground at scale `ground_scale`
-    /// ([`Ground::scale`]): `ground_weight` broken contacts where its anchor lies more than σ
-    /// under the ground, 0 above the horizon or without a ground.
+    /// ([`Problem::ground_scale`]): `ground_weight` broken contacts where its anchor lies more
+    /// than σ under the ground, 0 above the horizon or without a ground.
     fn ground_cost(&self, i: usize, piece: &Piece, ground_scale: f64) -> f64 {
         let Some(ground) = &self.ground else {
             return 0.0;
         };
         let ray = &self.extent_rays[i][0];
-        let inv = ground.plane.dot(ray);
+        let inv = ground.dot(ray);
         let z = piece.depth(ray);
         let sigma = self.truncation.sigma();
         // z / z_ground = z (mᵀx̄) / λ_ground.
@@ -353,7 +340,7 @@ impl Problem {
 
     /// E of the soup's current states.
     pub fn energy(&self, soup: &Soup) -> f64 {
-        let ground_scale = self.ground.as_ref().map_or(1.0, |g| g.scale(soup));
+        let ground_scale = self.ground_scale(soup);
         let unary: f64 = soup
             .pieces
             .iter()
@@ -373,7 +360,7 @@ impl Problem {
     /// The terms of E at the soup's current states (their sum is [`Problem::energy`] up to
     /// rounding).
     pub fn energy_terms(&self, soup: &Soup) -> EnergyTerms {
-        let ground_scale = self.ground.as_ref().map_or(1.0, |g| g.scale(soup));
+        let ground_scale = self.ground_scale(soup);
         let pieces = soup.pieces.iter().enumerate();
         EnergyTerms {
             proj: pieces.clone().map(|(i, p)| self.unary(i, p)).sum(),
@@ -412,7 +399,7 @@ pub fn refine(
         let particles: Vec<Vec<Piece>> = (0..soup.pieces.len())
             .map(|i| draw_particles(soup, problem, i, shrink, &mut rng))
             .collect();
-        let ground_scale = problem.ground.as_ref().map_or(1.0, |g| g.scale(soup));
+        let ground_scale = problem.ground_scale(soup);
         let unary: Vec<Vec<f64>> = particles
             .iter()
             .enumerate()
@@ -445,8 +432,7 @@ pub fn refine(
             *piece = ps[l];
         }
         // E does not see a global scale: the median λ goes back to 1.
-        let log_scales: Vec<f64> = soup.pieces.iter().map(|p| ln(p.lambda)).collect();
-        scales::set_scales(soup, &log_scales);
+        renormalise(soup);
         // The tables held the ground at the iteration's start; where the world's scale moved
         // enough to raise E after all, the iteration is undone.
         let mut energy = problem.energy(soup);
@@ -505,8 +491,6 @@ fn expand_scales(
         return (0, 0);
     }
     let movable: Vec<bool> = groups.iter().map(|&g| g == 1).collect();
-    let log_scales =
-        |pieces: &[Piece]| -> Vec<f64> { pieces.iter().map(|p| ln(p.lambda)).collect() };
     // The scale energy and its value at the current scales, built at the first move that lowers
     // E (expansions change scales only, so its contacts and segments stay valid).
     let mut scale: Option<(ScaleEnergy, f64)> = None;
@@ -586,7 +570,7 @@ fn expansion(soup: &mut Soup, problem: &Problem, movable: &[bool], factor: f64) 
             vec![p]
         }
     };
-    let ground_scale = problem.ground.as_ref().map_or(1.0, |g| g.scale(soup));
+    let ground_scale = problem.ground_scale(soup);
     let mut unary: Vec<Vec<f64>> = nodes
         .iter()
         .map(|&i| {
@@ -600,14 +584,11 @@ fn expansion(soup: &mut Soup, problem: &Problem, movable: &[bool], factor: f64) 
     for c in &problem.contacts {
         match (movable[c.a], movable[c.b]) {
             (true, true) => edges.push((c, problem.contact_table(c, &states(c.a), &states(c.b)))),
-            (true, false) => {
+            (true, false) | (false, true) => {
+                // The fixed side has one state, so the table runs over the movable side's.
+                let side = if movable[c.a] { c.a } else { c.b };
                 let table = problem.contact_table(c, &states(c.a), &states(c.b));
-                let u = &mut unary[node_of[c.a]];
-                u.iter_mut().zip(&table).for_each(|(u, t)| *u += t);
-            }
-            (false, true) => {
-                let table = problem.contact_table(c, &states(c.a), &states(c.b));
-                let u = &mut unary[node_of[c.b]];
+                let u = &mut unary[node_of[side]];
                 u.iter_mut().zip(&table).for_each(|(u, t)| *u += t);
             }
             (false, false) => {}
@@ -642,13 +623,22 @@ fn expansion(soup: &mut Soup, problem: &Problem, movable: &[bool], factor: f64) 
             piece.lambda *= factor;
         }
     }
-    let log_scales: Vec<f64> = soup.pieces.iter().map(|p| ln(p.lambda)).collect();
-    scales::set_scales(soup, &log_scales);
+    renormalise(soup);
     if problem.energy(soup) >= before {
         soup.pieces = previous;
         return 0;
     }
     count
+}
+
+/// ln λ of each of `pieces`.
+fn log_scales(pieces: &[Piece]) -> Vec<f64> {
+    pieces.iter().map(|p| ln(p.lambda)).collect()
+}
+
+/// Resets the median λ of `soup` to 1 (the refinement's energy does not see a global scale).
+fn renormalise(soup: &mut Soup) {
+    scales::set_scales(soup, &log_scales(&soup.pieces));
 }
 
 /// Sets to 0 the labels of every connected group (through `neighbours`) of pieces labelled 1
