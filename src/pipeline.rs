@@ -224,6 +224,17 @@ impl Reconstruction {
         }
     }
 
+    /// What this reconstruction's soup stages saw: frame 1, intrinsics, flow and its trusted
+    /// vectors at the working resolution (what the fusion's members are made from).
+    pub fn observed(&self) -> Observed<'_> {
+        Observed {
+            frame1: &self.frame1,
+            k: &self.report.camera.intrinsics,
+            flow: &self.flow,
+            reliable: &self.reliable,
+        }
+    }
+
     /// Per pixel of frame 1 (working resolution): the scene flow X' − X in camera 1's frame,
     /// NaN where unknown (see [`scene_flow`]). Computed when asked, like [`Self::clouds`].
     pub fn scene_flow(&self) -> Grid<[f32; 3]> {
@@ -247,7 +258,25 @@ impl Reconstruction {
 /// [`crate::soup::ensemble`]), once, and its depth and confidence are made again from the fused
 /// soup. Natively the members run on up to four threads (see `solve_members`); everything else
 /// runs on the calling thread.
+///
+/// The same in two steps, for callers that make the members elsewhere (the page, in Web Workers
+/// of their own): [`reconstruct_unfused`], a [`member_vote`] for each of [`member_counts`], then
+/// [`fuse_votes`].
 pub fn reconstruct(
+    pair: &FramePair,
+    flow: FlowInput,
+    params: &Params,
+    progress: &mut dyn FnMut(Stage, f32),
+) -> Result<Reconstruction> {
+    let mut rec = reconstruct_unfused(pair, flow, params, progress)?;
+    fuse(&mut rec, params, progress);
+    Ok(rec)
+}
+
+/// [`reconstruct`] up to the fusion: the kept pass, its `soup` not yet fused with the members
+/// (the same as `refined_soup`) and no [`Stage::Ensemble`] time in its report. [`fuse_votes`]
+/// finishes it.
+pub fn reconstruct_unfused(
     pair: &FramePair,
     flow: FlowInput,
     params: &Params,
@@ -284,14 +313,12 @@ pub fn reconstruct(
              tried as a shrink f and a growth 1/f)"
         )));
     }
-    let mut rec = match flow {
+    match flow {
         FlowInput::Given(given) => {
             reconstruct_from(pair, FlowInput::Given(given), params, None, progress)
         }
         FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, params, progress),
-    }?;
-    fuse(pair, &mut rec, params, progress);
-    Ok(rec)
+    }
 }
 
 /// One pass of [`reconstruct_from`] with computed flow, as [`reconstruct_until_pinned`] weighs it.
@@ -535,7 +562,7 @@ fn reconstruct_from(
     let solved = solve_soup(seen, params, segmentation, &mut clock, progress)?;
     progress(Stage::Outputs, 0.0);
     let inputs = solved.segmentation.scale_inputs(&flow, &reliable, &k);
-    let (confidence, depth, depth_input) = outputs(pair, &solved.soup, &inputs, params);
+    let (confidence, depth, depth_input) = outputs(pair.input_size, &solved.soup, &inputs, params);
     clock.lap(Stage::Outputs);
     progress(Stage::Outputs, 1.0);
     let Solved {
@@ -592,9 +619,10 @@ fn reconstruct_from(
 }
 
 /// What the outputs stage derives from a soup: each superpixel's scale confidence, the frame-1
-/// depth at the working resolution and at the input resolution of `pair`.
+/// depth at the working resolution and at the input resolution `input_size` (`(width,
+/// height)`, pixels).
 fn outputs(
-    pair: &FramePair,
+    input_size: (usize, usize),
     soup: &Soup,
     inputs: &ScaleInputs,
     params: &Params,
@@ -602,8 +630,12 @@ fn outputs(
     let (k, labels) = (inputs.intrinsics, &inputs.superpixels.labels);
     let confidence = depth_confidence(soup, inputs, &params.scales);
     let depth = dense_depth(soup, labels, k);
-    let (iw, ih) = pair.input_size;
-    let (sx, sy) = pair.scale();
+    let (iw, ih) = input_size;
+    // Working size over input size, as FramePair::scale.
+    let (sx, sy) = (
+        labels.width() as f64 / iw as f64,
+        labels.height() as f64 / ih as f64,
+    );
     let depth_input = depth_at(soup, labels, iw, ih, &k.scaled(1.0 / sx, 1.0 / sy));
     (confidence, depth, depth_input)
 }
@@ -614,43 +646,113 @@ fn unconfident(confidence: &[f64], params: &Params) -> usize {
     confidence.iter().filter(|&&c| c < min).count()
 }
 
-/// The fusion stage: [`fuse_members`] into `rec`'s soup, then its depth, confidence and report
-/// made again from the fused soup. Reported to `progress` (and timed) as [`Stage::Ensemble`]
-/// even when `params.ensemble.members` is 1 and nothing is fused.
-fn fuse(
-    pair: &FramePair,
+/// The fusion stage of [`reconstruct`] on a reconstruction of [`reconstruct_unfused`] with
+/// `params`: a [`member_vote`] for each of [`member_counts`] (natively several at once,
+/// `solve_members`), then [`fuse_votes`]. Reported to `progress` (and timed) as
+/// [`Stage::Ensemble`] even when `params.ensemble.members` is 1 and nothing is fused.
+pub fn fuse(rec: &mut Reconstruction, params: &Params, progress: &mut dyn FnMut(Stage, f32)) {
+    let start = now_ms();
+    progress(Stage::Ensemble, 0.0);
+    let counts = member_counts(params);
+    let seen = rec.observed();
+    let vote = |count: usize| member_vote(seen, params, count);
+    let made = solve_members(member_threads(), &counts, vote, &mut |f| {
+        progress(Stage::Ensemble, f)
+    });
+    let made = made.into_iter().map(|v| v.map_err(|e| e.to_string()));
+    fuse_votes(rec, params, made.collect(), now_ms() - start);
+    progress(Stage::Ensemble, 1.0);
+}
+
+/// The superpixel counts of the members fused into a reconstruction with `params` (none when
+/// `ensemble.members` is 1 or less), in the order [`fuse_votes`] takes their votes.
+pub fn member_counts(params: &Params) -> Vec<usize> {
+    let ensemble = &params.ensemble;
+    if ensemble.members <= 1 {
+        return Vec::new();
+    }
+    ensemble.member_counts(params.superpixels.count)
+}
+
+/// One member of the fusion ([`crate::soup::ensemble`]): the soup stages over what `seen` shows
+/// (the kept reconstruction's [`Reconstruction::observed`]) from `count` superpixels, with the
+/// members' cheaper refinement (`ensemble.member_iterations` and `member_particles` of
+/// `params`), and its vote: its depth at every [`SAMPLE_STRIDE`]-th pixel, pinned where its
+/// piece's depth confidence is at least `scales.min_confidence`. Deterministic: the same
+/// inputs give the same vote on any thread or machine. A flow or trust map of another size than
+/// frame 1 is an [`Error::InvalidParameter`].
+pub fn member_vote(seen: Observed, params: &Params, count: usize) -> Result<Vote> {
+    let size = seen.frame1.size();
+    if seen.flow.size() != size || seen.reliable.size() != size {
+        return Err(Error::InvalidParameter(format!(
+            "a member's flow ({:?}) and trusted vectors ({:?}) must be the size of frame 1 ({size:?})",
+            seen.flow.size(),
+            seen.reliable.size()
+        )));
+    }
+    let ensemble = &params.ensemble;
+    let mut member = *params;
+    member.superpixels.count = count;
+    member.refine.iterations = ensemble.member_iterations;
+    member.refine.particles = ensemble.member_particles;
+    let solved = solve_soup(seen, &member, None, &mut Clock::start(), &mut |_, _| {})?;
+    let segmentation = &solved.segmentation;
+    let inputs = segmentation.scale_inputs(seen.flow, seen.reliable, seen.k);
+    let confidence = depth_confidence(&solved.soup, &inputs, &params.scales);
+    let labels = &segmentation.superpixels.labels;
+    Ok(vote_of(&solved.soup, labels, &confidence, seen.k, params))
+}
+
+/// Finishes a reconstruction of [`reconstruct_unfused`] with `params`: moves each piece of its
+/// soup to the weighted median scale of its own vote and the members' (`made`: one per
+/// [`member_counts`], in their order; an `Err` holds why that member could not be made, and it
+/// is left out with a note in the report, as is a member `made` lacks), then makes its depth,
+/// confidence and report again from the fused soup. `members_ms` is the time the members took,
+/// added to the [`Stage::Ensemble`] time with the fusion's own. With no members
+/// (`ensemble.members` 1) only that time is recorded.
+pub fn fuse_votes(
     rec: &mut Reconstruction,
     params: &Params,
-    progress: &mut dyn FnMut(Stage, f32),
+    made: Vec<std::result::Result<Vote, String>>,
+    members_ms: f64,
 ) {
     let mut clock = Clock::start();
-    progress(Stage::Ensemble, 0.0);
-    let k = rec.report.camera.intrinsics;
-    let seen = Observed {
-        frame1: &rec.frame1,
-        k: &k,
-        flow: &rec.flow,
-        reliable: &rec.reliable,
-    };
-    let ensemble = fuse_members(
-        seen,
-        params,
-        &rec.superpixels.labels,
-        &rec.report.confidence,
-        &mut rec.soup,
-        &mut |f| progress(Stage::Ensemble, f),
-    );
-    if ensemble.is_some() {
-        let (confidence, depth, depth_input) =
-            outputs(pair, &rec.soup, &rec.scale_inputs(), params);
+    clock.last -= members_ms;
+    let counts = member_counts(params);
+    let ensemble = (!counts.is_empty()).then(|| {
+        let (mut votes, mut failed) = (Vec::new(), Vec::new());
+        let made = made
+            .into_iter()
+            .chain(std::iter::repeat_with(|| Err("not made".into())));
+        for (count, vote) in counts.iter().zip(made) {
+            match vote {
+                Ok(v) => votes.push(v),
+                Err(e) => failed.push(format!("{count} superpixels: {e}")),
+            }
+        }
+        let k = rec.report.camera.intrinsics;
+        let labels = &rec.superpixels.labels;
+        let own = vote_of(&rec.soup, labels, &rec.report.confidence, &k, params);
+        let guess_weight = params.ensemble.guess_weight;
+        let rescaled = fuse_scales(&mut rec.soup, &sampled(labels), &own, &votes, guess_weight);
+        let (confidence, depth, depth_input) = outputs(
+            rec.report.input_size,
+            &rec.soup,
+            &rec.scale_inputs(),
+            params,
+        );
         (rec.depth, rec.depth_input) = (depth, depth_input);
         rec.report.unconfident = unconfident(&confidence, params);
         rec.report.confidence = confidence;
-    }
+        EnsembleReport {
+            counts,
+            failed,
+            rescaled,
+        }
+    });
     rec.report.ensemble = ensemble;
     clock.lap(Stage::Ensemble);
     rec.report.timings_ms.extend(clock.laps);
-    progress(Stage::Ensemble, 1.0);
 }
 
 /// What [`solve_soup`] makes: the segmentation and the soup after each of its stages.
@@ -666,16 +768,19 @@ struct Solved {
     refine: Option<RefineReport>,
 }
 
-/// What one pass of the soup stages sees, all at the working resolution.
+/// What one pass of the soup stages sees, all at the working resolution (a fusion member,
+/// [`member_vote`], sees the kept reconstruction's: [`Reconstruction::observed`]).
 #[derive(Clone, Copy)]
-struct Observed<'a> {
-    frame1: &'a Frame,
+pub struct Observed<'a> {
+    /// The reference frame.
+    pub frame1: &'a Frame,
     /// Intrinsics of the working resolution.
-    k: &'a Intrinsics,
-    /// Flow 1→2 (px).
-    flow: &'a FlowField,
-    /// The flow vectors to trust (known, and through the forward–backward check when computed).
-    reliable: &'a Grid<bool>,
+    pub k: &'a Intrinsics,
+    /// Flow 1→2 (px), the size of `frame1`.
+    pub flow: &'a FlowField,
+    /// The flow vectors to trust (known, and through the forward–backward check when computed),
+    /// the size of `frame1`.
+    pub reliable: &'a Grid<bool>,
 }
 
 /// The soup stages of one pass over what `seen` shows: superpixels of its frame 1 (or a copy of
@@ -738,63 +843,6 @@ fn solve_soup(
     })
 }
 
-/// Fuses members into `soup` (frame-1 labels `labels`, each superpixel's depth confidence
-/// `confidence`) when `params.ensemble.members` is more than 1 (see [`crate::soup::ensemble`]):
-/// each member is [`solve_soup`] over what `seen` shows from one of
-/// [`EnsembleParams::member_counts`] superpixels, with the members' cheaper refinement
-/// ([`solve_members`]: natively several at once); their votes (depth maps at every
-/// [`SAMPLE_STRIDE`]-th pixel, and where each is pinned) move each piece of `soup` to their
-/// weighted median scale. A member that cannot be made is left out with a note in the report.
-/// `progress` gets the share of members done.
-fn fuse_members(
-    seen: Observed,
-    params: &Params,
-    labels: &Grid<u32>,
-    confidence: &[f64],
-    soup: &mut Soup,
-    progress: &mut dyn FnMut(f32),
-) -> Option<EnsembleReport> {
-    let ensemble = &params.ensemble;
-    if ensemble.members <= 1 {
-        return None;
-    }
-    let counts = ensemble.member_counts(params.superpixels.count);
-    let member_vote = |count: usize| {
-        let mut member = *params;
-        member.superpixels.count = count;
-        member.refine.iterations = ensemble.member_iterations;
-        member.refine.particles = ensemble.member_particles;
-        let solved = solve_soup(seen, &member, None, &mut Clock::start(), &mut |_, _| {})?;
-        let segmentation = &solved.segmentation;
-        let inputs = segmentation.scale_inputs(seen.flow, seen.reliable, seen.k);
-        let confidence = depth_confidence(&solved.soup, &inputs, &params.scales);
-        let labels = &segmentation.superpixels.labels;
-        Ok(vote_of(&solved.soup, labels, &confidence, seen.k, params))
-    };
-    let made = solve_members(member_threads(), &counts, member_vote, progress);
-    let (mut votes, mut failed) = (Vec::new(), Vec::new());
-    for (count, vote) in counts.iter().zip(made) {
-        match vote {
-            Ok(v) => votes.push(v),
-            Err(e) => failed.push(format!("{count} superpixels: {e}")),
-        }
-    }
-    let own = vote_of(soup, labels, confidence, seen.k, params);
-    let sampled_labels = sampled(labels);
-    let rescaled = fuse_scales(
-        soup,
-        &sampled_labels,
-        &own,
-        &votes,
-        params.ensemble.guess_weight,
-    );
-    Some(EnsembleReport {
-        counts,
-        failed,
-        rescaled,
-    })
-}
-
 /// `labels` at every [`SAMPLE_STRIDE`]-th pixel in x and y, as the fusion sees them.
 fn sampled(labels: &Grid<u32>) -> Grid<u32> {
     let s = SAMPLE_STRIDE;
@@ -824,7 +872,8 @@ fn vote_of(
 const MAX_MEMBER_THREADS: usize = 4;
 
 /// How many members are made at once: natively up to `MAX_MEMBER_THREADS`, no more than the
-/// machine has cores; in the browser, whose worker has one thread, one.
+/// machine has cores; in wasm, whose instance has one thread, one (the page makes them in
+/// workers of their own instead: [`member_vote`], `src/web/members.rs`).
 fn member_threads() -> usize {
     #[cfg(not(target_arch = "wasm32"))]
     let threads = std::thread::available_parallelism()

@@ -498,6 +498,76 @@ fn flow_is_computed_again_finer_while_too_little_passes_its_check() {
 }
 
 #[test]
+fn the_fusion_made_in_steps_is_the_fusion_made_at_once() {
+    use superpixel_soup::pipeline::{
+        Stage, fuse_votes, member_counts, member_vote, reconstruct_unfused,
+    };
+    // The page makes the members in workers of their own: the kept pass, one vote per count,
+    // then the fusion. The result is the same, bit for bit, as the one-call pipeline's.
+    let s = render(SceneKind::Street, 320, 136).unwrap();
+    let pair = pair_of(&s.frame1, &s.frame2, s.intrinsics);
+    let params = small_run(0.0, 0.0);
+    let flow = || FlowInput::Given(s.flow12.clone());
+    let at_once = reconstruct(&pair, flow(), &params, &mut |_, _| {}).unwrap();
+    let steps = |made: &dyn Fn(usize, usize) -> Result<_, String>| {
+        let mut rec = reconstruct_unfused(&pair, flow(), &params, &mut |_, _| {}).unwrap();
+        assert_eq!(rec.soup.pieces, rec.refined_soup.pieces, "not fused yet");
+        let counts = member_counts(&params);
+        let votes = (counts.iter().enumerate())
+            .map(|(i, &c)| made(i, c))
+            .collect();
+        fuse_votes(&mut rec, &params, votes, 0.0);
+        rec
+    };
+    let vote = |count| member_vote(at_once.observed(), &params, count).map_err(|e| e.to_string());
+    let in_steps = steps(&|_, count| vote(count));
+    assert_eq!(in_steps.report.ensemble, at_once.report.ensemble);
+    assert_eq!(in_steps.soup.pieces, at_once.soup.pieces);
+    let bits = |rec: &Reconstruction| {
+        rec.depth
+            .data()
+            .iter()
+            .map(|z| z.to_bits())
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(bits(&in_steps), bits(&at_once));
+    assert_eq!(in_steps.report.confidence, at_once.report.confidence);
+    assert!(
+        in_steps
+            .report
+            .timings_ms
+            .iter()
+            .any(|(stage, _)| *stage == Stage::Ensemble)
+    );
+    // A member that could not be made is left out with its count and why.
+    let without = steps(&|i, count| {
+        if i == 1 {
+            Err("crashed".into())
+        } else {
+            vote(count)
+        }
+    });
+    let report = without.report.ensemble.unwrap();
+    let counts = member_counts(&params);
+    assert_eq!(
+        report.failed,
+        vec![format!("{} superpixels: crashed", counts[1])]
+    );
+    assert_ne!(
+        without.soup.pieces, at_once.soup.pieces,
+        "three members fuse to another result"
+    );
+    // A flow of another size than frame 1 is refused with a typed error.
+    let mut seen = at_once.observed();
+    let small = Grid::filled(4, 4, [0.0f32; 2]);
+    seen.flow = &small;
+    assert!(matches!(
+        member_vote(seen, &params, 100),
+        Err(Error::InvalidParameter(_))
+    ));
+}
+
+#[test]
 fn a_reconstruction_that_pins_too_little_is_made_again_from_finer_flow() {
     use superpixel_soup::flow::{FlowParams, Preset};
     use superpixel_soup::pipeline::{Stage, pinned_share};

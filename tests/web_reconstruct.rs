@@ -13,10 +13,11 @@ use superpixel_soup::image::resize;
 use superpixel_soup::image::{Frame, encode_png};
 use superpixel_soup::input::DEFAULT_MAX_SIDE;
 use superpixel_soup::synth::{SceneKind, render};
+use superpixel_soup::web::members::MemberSource;
 use superpixel_soup::web::memory::failed_allocation;
 use superpixel_soup::web::reconstruct::{
     FrameBuilder, PAGE_FLOW_PRESET, PageReconstruction, page_defaults, page_params, read_exif,
-    reconstruct, resolve_intrinsics_json,
+    reconstruct, reconstruct_unfused, resolve_intrinsics_json,
 };
 use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
@@ -377,4 +378,79 @@ fn frames_decoded_smaller_keep_the_photos_size_for_outputs_and_checks() {
         message.contains("160×68") && message.contains("320×136"),
         "{message}"
     );
+}
+
+#[wasm_bindgen_test]
+fn members_made_in_other_workers_fuse_to_the_same_result() {
+    // The worker's way (www/worker.js): the kept pass, each member's vote from the copied
+    // inputs (in a helper worker, here in turn), the votes added in the order of their counts,
+    // then the fusion; the same files and report as the one-call reconstruct, but for times.
+    let s = render(SceneKind::Street, 256, 110).unwrap();
+    let options = options("{}");
+    let mut whole = run(&s.frame1, &s.frame2, &options).unwrap();
+    let mut parts =
+        reconstruct_unfused(builder(&s.frame1), builder(&s.frame2), &options, None).unwrap();
+    let inputs = parts.member_inputs();
+    let counts = inputs.counts().to_vec();
+    assert_eq!(counts, vec![140, 160, 130, 170]);
+    let (frame, flow, reliable) = (
+        inputs.frame().to_vec(),
+        inputs.flow().to_vec(),
+        inputs.reliable().to_vec(),
+    );
+    let (w, h, k) = (
+        inputs.width(),
+        inputs.height(),
+        inputs.intrinsics().to_vec(),
+    );
+    assert_eq!(
+        (w, h, frame.len(), flow.len()),
+        (256, 110, 3 * 256 * 110, 2 * 256 * 110)
+    );
+    let source = |flow: &[f32]| {
+        let (frame, flow, reliable) = (frame.clone(), flow.to_vec(), reliable.clone());
+        MemberSource::new(&options, w, h, &k, frame, flow, reliable)
+    };
+    let helper = source(&flow).unwrap();
+    // Members 0 and 2 made "here", 1 and 3 by a "helper".
+    for (i, &count) in counts.iter().enumerate() {
+        let v = if i % 2 == 0 {
+            parts.member_vote(count)
+        } else {
+            helper.vote(count)
+        };
+        let v = v.unwrap();
+        (parts.add_vote(
+            v.width(),
+            v.height(),
+            &v.depth().to_vec(),
+            &v.pinned().to_vec(),
+        ))
+        .unwrap();
+    }
+    parts.fuse(12.0).unwrap();
+    for file in ["depth.pfm", "frame1.ply", "frame2.ply", "flow.flo"] {
+        assert_eq!(
+            parts.export_file(file).unwrap(),
+            whole.export_file(file).unwrap(),
+            "{file}"
+        );
+    }
+    let report = |r: &PageReconstruction| {
+        let mut json: serde_json::Value = serde_json::from_str(&r.report().unwrap()).unwrap();
+        json.as_object_mut().unwrap().remove("timings_ms");
+        json
+    };
+    assert_eq!(report(&parts), report(&whole));
+    // Finished: the fusion's methods throw.
+    for thrown in [parts.add_failure("late"), parts.fuse(0.0)] {
+        assert_eq!(
+            name_and_message(thrown.unwrap_err()).0,
+            "InvalidParameterError"
+        );
+    }
+    // Arrays that do not fit the size throw named errors.
+    let (name, message) = name_and_message(source(&flow[2..]).err().unwrap());
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("flow"), "{message}");
 }

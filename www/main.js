@@ -14,7 +14,8 @@
 //   view3d.js         the 3D view: loading, the cloud, the soup switch, GPU loss recovery
 //   persist.js        the last result kept across a reload (IndexedDB), start over
 //
-// URL options: ?backend=auto|webgpu|webgl2 picks the viewer's graphics backend; ?worker=full
+// URL options: ?backend=auto|webgpu|webgl2 picks the viewer's graphics backend; ?threads=1
+// makes the fusion's members in the pipeline's worker alone (www/worker.js); ?worker=full
 // runs the pipeline with the full wasm build instead of the lean one (for measurements).
 
 import { $, page } from './page/ui.js';

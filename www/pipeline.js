@@ -29,10 +29,13 @@ export class Pipeline {
    *   onReady({ version, defaults, startMs }): each time a (re)started worker has loaded its module;
    *   onFailed(message): the worker could not load its module.
    * @param {'lean' | 'full'} module the worker's wasm build (see www/worker.js)
+   * @param {string | null} threads at most this many workers make a run's fusion members at
+   *   once (www/worker.js); null: the worker's own limit
    */
-  constructor(handlers, module = 'lean') {
+  constructor(handlers, module = 'lean', threads = null) {
     this.handlers = handlers;
     this.module = module;
+    this.threads = threads;
     this.worker = null;
     this.pending = new Map();
     this.nextId = 1;
@@ -49,6 +52,9 @@ export class Pipeline {
     const url = new URL('./worker.js', import.meta.url);
     if (this.module !== 'lean') {
       url.searchParams.set('module', this.module);
+    }
+    if (this.threads !== null) {
+      url.searchParams.set('threads', this.threads);
     }
     return url;
   }

@@ -4,6 +4,15 @@
 // pixels and results across. `worker.js?module=full` loads the full build instead (the page's
 // `?worker=full`; benches/page.mjs compares the two).
 //
+// The fusion's members (src/soup/ensemble.rs: four more reconstructions of the same flow from
+// other superpixel counts, two thirds of a run's time) are made in parallel: a run starts up to
+// MAX_THREADS − 1 helper workers (this same script with `?helper=1`, nested, given this
+// worker's compiled module), each makes some of the members (a `MemberSource` from a copy of
+// the run's inputs) while this worker makes the rest (`memberVote`), and this worker fuses the
+// votes (src/web/members.rs). The result is the same, bit for bit, however many make them. A
+// helper that cannot start or crashes leaves its members to this worker. `worker.js?threads=1`
+// (the page's `?threads=1`) makes every member here, one after the other.
+//
 // Requests (each with an `id`; answered by { type: 'reply', id, ... } or { type: 'error', id, ... }):
 //   { type: 'exif', bytes: ArrayBuffer }                   → { exif: { focal35mm, warning } }
 //   { type: 'decode-jpeg', bytes: ArrayBuffer, maxSide }   → { width, height (the photo,
@@ -21,14 +30,24 @@
 //       working size } (ground-truth depth of frame 1: PFM, .dpt or 16-bit PNG; see
 //       src/web/ground_truth.rs)
 //   { type: 'score-flow', name, bytes }                     → { score } (ground-truth .flo)
+//   { type: 'members', source: { options (JSON), memberInputs' arrays }, counts }
+//       → { type: 'vote', id, index, vote: { width, height, depth, pinned } | error }… (one per
+//       count, `index` its place in `counts`), then a reply (a helper's request)
 // Unasked: { type: 'ready', version, defaults } once the module is loaded; { type: 'failed',
 // message } when it cannot be loaded.
 // Errors: { type: 'error', id, name, message, fatal }. `fatal` means the wasm instance aborted
 // (out of memory, or a bug) and is unusable: the page replaces the worker. An out-of-memory abort
 // is named OutOfMemoryError.
 
-const MODULES = { lean: './pkg/soup_worker.js', full: './pkg/superpixel_soup.js' };
-const soup = await import(MODULES[new URL(import.meta.url).searchParams.get('module') ?? 'lean']);
+const MODULES = { lean: 'soup_worker', full: 'superpixel_soup' };
+const SEARCH = new URL(import.meta.url).searchParams;
+const soup = await import(`./pkg/${MODULES[SEARCH.get('module') ?? 'lean']}.js`);
+
+/**
+ * Workers making a run's members at once, this one included: 4, the default number of members
+ * (more would idle). Each helper holds one member's memory until the run ends (HELPERS_MIB).
+ */
+const MAX_THREADS = 4;
 
 /** The last reconstruction, kept in wasm memory for clouds and exports on request. */
 let current = null;
@@ -69,10 +88,11 @@ function takeCloud(buffers) {
 
 const cloudTransfer = (c) => [c.positions1.buffer, c.positions2.buffer, c.colours.buffer, c.labels.buffer];
 
-function run(id, { frames, options, quiet = false }) {
+async function run(id, { frames, options, quiet = false }) {
   const clock = performance.now();
   current?.free();
   current = null;
+  const [width, height] = [frames[0].width, frames[0].height];
   const [one, two] = frames.map(readFrame);
   const pixelsMs = performance.now() - clock;
   let last = { stage: '', fraction: -1 };
@@ -84,7 +104,21 @@ function run(id, { frames, options, quiet = false }) {
     }
   };
   const start = performance.now();
-  current = soup.reconstruct(one, two, JSON.stringify(options), progress);
+  const json = JSON.stringify(options);
+  let made;
+  // A nested worker loads its script through this worker's event loop: the helpers are
+  // waited for here, not while the kept pass holds the loop.
+  const helpers = await startHelpers(threadsFor(options, quiet, width, height) - 1);
+  try {
+    made = soup.reconstructUnfused(one, two, json, progress);
+    await fuseMembers(made, json, helpers, progress);
+  } catch (e) {
+    made?.free();
+    throw e;
+  } finally {
+    helpers.forEach((helper) => helper.terminate());
+  }
+  current = made;
   const reconstructMs = performance.now() - start;
   if (quiet) {
     return [{ result: null }];
@@ -102,11 +136,221 @@ function run(id, { frames, options, quiet = false }) {
     pictures,
     legend: JSON.parse(current.depthLegend(64)),
     report: JSON.parse(current.report()),
-    timings: { pixelsMs, reconstructMs, collectMs: performance.now() - collect },
+    // `helpers`: the helper workers that made members (www/pipeline.js's lastRun.worker).
+    timings: { pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length },
     memoryBytes: soup.memoryBytes(),
   };
   const transfer = [...cloudTransfer(cloud), ...Object.values(pictures).map((p) => p.buffer)];
   return [{ result }, transfer];
+}
+
+/**
+ * How many workers make the members of a run with `options` on frames of `width × height`
+ * pixels: one per member, at most MAX_THREADS, the machine's cores, the page's `?threads=`, and
+ * as many helpers as HELPERS_MIB allows at the working size; one where a worker cannot start
+ * workers of its own, and for a `quiet` run. A quiet run computes a result the page already
+ * shows again in the background (www/pipeline.js), while the page holds that result's clouds
+ * and pictures: that is when the tab's memory peaks, and a helper there took the 12 MP photo
+ * pair from 367 to 409 MiB, above the page's 400.
+ */
+function threadsFor(options, quiet, width, height) {
+  if (quiet || typeof Worker !== 'function') {
+    return 1;
+  }
+  // Options that do not say take the library's defaults.
+  const defaults = () => JSON.parse(soup.pageDefaults()).options;
+  const members = options?.params?.ensemble?.members ?? defaults().params.ensemble.members;
+  const maxSide = options?.maxSide ?? defaults().maxSide;
+  const shrink = Math.min(1, maxSide / Math.max(width, height));
+  const helperMiB = HELPER_MIB + (HELPER_BYTES_PER_PIXEL * width * height * shrink * shrink) / 2 ** 20;
+  const threads = Number(SEARCH.get('threads'));
+  const asked = Number.isInteger(threads) && threads >= 1 ? threads : MAX_THREADS;
+  const cores = navigator.hardwareConcurrency ?? 1;
+  const affordable = 1 + Math.floor(HELPERS_MIB / helperMiB);
+  return Math.max(1, Math.min(members - 1, asked, cores, MAX_THREADS, affordable));
+}
+
+/**
+ * The tab memory one helper takes during a run: HELPER_MIB for the worker and its instance, and
+ * HELPER_BYTES_PER_PIXEL per pixel of the working size for a member and its copy of the inputs
+ * (sampled during runs: 47 MiB a helper at 1024 × 768, 30 MiB at 1024 × 436).
+ */
+const HELPER_MIB = 8;
+const HELPER_BYTES_PER_PIXEL = 50;
+
+/**
+ * The most tab memory a run's helpers may take together (MiB): 1024 × 436 gets three helpers,
+ * 1024 × 768 (12 MP photos) two. During a run without helpers the tab holds about 260 MiB at
+ * 1024 × 768, and after it, with the result shown and computed again in the background, 370:
+ * two helpers stay below that peak, while three took the run to 410 MiB, above the page's 400.
+ */
+const HELPERS_MIB = 100;
+
+/**
+ * `n` helper workers running this script with this worker's module, once they have loaded it:
+ * those that fail to load, or take longer than HELPER_LOAD_MS, are left out (terminated).
+ */
+async function startHelpers(n) {
+  const started = [];
+  for (let i = 0; i < n; i += 1) {
+    try {
+      const url = new URL(import.meta.url);
+      url.searchParams.set('helper', '1');
+      started.push(new Worker(url, { type: 'module' }));
+    } catch {
+      break; // this worker makes their members
+    }
+  }
+  const loaded = await Promise.all(started.map(loadedHelper));
+  started.filter((_, i) => !loaded[i]).forEach((helper) => helper.terminate());
+  return started.filter((_, i) => loaded[i]);
+}
+
+/** The longest wait for a helper to load its module (ms), after which it is left out. */
+const HELPER_LOAD_MS = 5000;
+
+/** Resolves to whether `helper` loaded its module within HELPER_LOAD_MS. */
+function loadedHelper(helper) {
+  return new Promise((resolve) => {
+    const timer = setTimeout(() => resolve(false), HELPER_LOAD_MS);
+    const settle = (ok) => {
+      clearTimeout(timer);
+      resolve(ok);
+    };
+    helper.onmessage = ({ data }) => {
+      if (data.type === 'waiting') {
+        helper.postMessage({ type: 'module', module: compiled });
+      } else {
+        settle(data.type === 'ready');
+      }
+    };
+    helper.onerror = (event) => {
+      event.preventDefault();
+      settle(false);
+    };
+  });
+}
+
+/**
+ * Makes the members of `result` (src/web/members.rs), each in the worker `assign` gives it
+ * (this one or a helper), then adds the votes in the order of their counts and fuses them. The
+ * members of a helper that crashes are made here afterwards.
+ */
+async function fuseMembers(result, json, helpers, progress) {
+  const start = performance.now();
+  const counts = [...result.memberCounts()];
+  const owners = assign(counts, helpers.length + 1);
+  const mine = (k) => owners.flatMap((owner, i) => (owner === k ? [i] : []));
+  const votes = new Array(counts.length).fill(null);
+  let done = 0;
+  const settle = (index, vote) => {
+    votes[index] = vote;
+    done += 1;
+    progress?.('ensemble', done / counts.length);
+  };
+  progress?.('ensemble', 0);
+  const asked = helpers.length === 0 ? [] : askHelpers(result, json, helpers, counts, mine, settle);
+  const here = (index) => settle(index, takeVote(() => result.memberVote(counts[index])));
+  for (const index of mine(0)) {
+    here(index);
+    await nextTask(); // the helpers' votes come in (progress)
+  }
+  await Promise.all(asked);
+  votes.forEach((vote, index) => vote === null && here(index));
+  for (const vote of votes) {
+    if (vote.error === undefined) {
+      result.addVote(vote.width, vote.height, vote.depth, vote.pinned);
+    } else {
+      result.addFailure(vote.error);
+    }
+  }
+  result.fuse(performance.now() - start);
+}
+
+/**
+ * The worker of each member (0: this one, k: helper k − 1) among `workers`: the largest counts
+ * first, each to the worker with the fewest superpixels so far (a member's time grows with its
+ * count; with two workers 1300–1700 split as 1700 + 1300 and 1600 + 1400).
+ */
+function assign(counts, workers) {
+  const load = new Array(workers).fill(0);
+  const owners = new Array(counts.length);
+  const order = counts.map((_, i) => i).sort((a, b) => counts[b] - counts[a] || a - b);
+  for (const i of order) {
+    const k = load.indexOf(Math.min(...load));
+    owners[i] = k;
+    load[k] += counts[i];
+  }
+  return owners;
+}
+
+/** Resolves after the messages already queued for this worker are handled. */
+const nextTask = () => new Promise((resolve) => setTimeout(resolve));
+
+/**
+ * A member's vote from `make()` (a wasm VoteBuffers) as { width, height, depth, pinned }, or
+ * { error } (why it could not be made). A crash of this instance is thrown on.
+ */
+function takeVote(make) {
+  try {
+    const vote = make();
+    const plain = { width: vote.width, height: vote.height, depth: vote.depth, pinned: vote.pinned };
+    vote.free();
+    return plain;
+  } catch (e) {
+    const { message, fatal } = describe(e);
+    if (fatal) {
+      throw e; // this instance is unusable: the run fails as a crash
+    }
+    return { error: message };
+  }
+}
+
+/**
+ * Sends each helper (loaded) what the members are made from (copies; the last one is given
+ * this worker's) and its members (`mine(k + 1)`, indices into `counts`); `settle(index, vote)`
+ * gets each vote as it comes. One promise per helper, resolved when it is done or crashed (its
+ * members without a vote are then made here).
+ */
+function askHelpers(result, json, helpers, counts, mine, settle) {
+  const inputs = result.memberInputs();
+  const source = {
+    options: json, width: inputs.width, height: inputs.height, intrinsics: inputs.intrinsics,
+    frame: inputs.frame, flow: inputs.flow, reliable: inputs.reliable,
+  };
+  inputs.free();
+  const buffers = [source.intrinsics, source.frame, source.flow, source.reliable].map((a) => a.buffer);
+  return helpers.map((helper, k) => new Promise((resolve) => {
+    const indices = mine(k + 1);
+    helper.onmessage = ({ data }) => {
+      if (data.type === 'vote') {
+        settle(indices[data.index], data.vote);
+      } else {
+        resolve(); // the reply, or an error
+      }
+    };
+    helper.onerror = (event) => {
+      event.preventDefault();
+      resolve();
+    };
+    const transfer = k === helpers.length - 1 ? buffers : [];
+    helper.postMessage({ type: 'members', id: 0, source, counts: indices.map((i) => counts[i]) }, transfer);
+  }));
+}
+
+/** A helper's request: the votes of `counts` from `source`, each posted as it is made. */
+function makeMembers(id, { source: s, counts }) {
+  const source = new soup.MemberSource(s.options, s.width, s.height, s.intrinsics, s.frame, s.flow, s.reliable);
+  try {
+    for (const [index, count] of counts.entries()) {
+      const vote = takeVote(() => source.vote(count));
+      const transfer = vote.error === undefined ? [vote.depth.buffer, vote.pinned.buffer] : [];
+      postMessage({ type: 'vote', id, index, vote }, transfer);
+    }
+  } finally {
+    source.free();
+  }
+  return [{}];
 }
 
 function handle(message) {
@@ -130,6 +374,8 @@ function handle(message) {
       return [{ camera: JSON.parse(soup.resolveIntrinsics(message.width, message.height, message.focal35mm ?? undefined)) }];
     case 'run':
       return run(message.id, message);
+    case 'members':
+      return makeMembers(message.id, message);
     case 'cloud': {
       const cloud = takeCloud(needResult().cloud(message.soup));
       return [{ cloud }, cloudTransfer(cloud)];
@@ -184,16 +430,40 @@ function describe(error) {
   return { name: error?.name ?? 'Error', message: error?.message ?? String(error), fatal: false };
 }
 
+/**
+ * The module compiled: fetched by the page's worker; a helper is given its worker's (the
+ * `module` message), so that they share the compiled code, its optimised tiers included.
+ */
+async function compiledModule() {
+  if (SEARCH.has('helper')) {
+    return new Promise((resolve) => {
+      onmessage = ({ data }) => resolve(data.module);
+      postMessage({ type: 'waiting' });
+    });
+  }
+  const url = new URL(`./pkg/${MODULES[SEARCH.get('module') ?? 'lean']}_bg.wasm`, import.meta.url);
+  try {
+    return await WebAssembly.compileStreaming(fetch(url));
+  } catch {
+    // Served without the type application/wasm.
+    return WebAssembly.compile(await (await fetch(url)).arrayBuffer());
+  }
+}
+
+/** This worker's compiled module (see compiledModule), for its helpers. */
+let compiled = null;
+
 async function main() {
   try {
-    await soup.default();
+    compiled = await compiledModule();
+    await soup.default({ module_or_path: compiled });
   } catch (e) {
     postMessage({ type: 'failed', message: `could not load the WebAssembly module: ${e.message ?? e}` });
     return;
   }
-  onmessage = ({ data }) => {
+  onmessage = async ({ data }) => {
     try {
-      const [reply, transfer = []] = handle(data);
+      const [reply, transfer = []] = await handle(data);
       postMessage({ type: 'reply', id: data.id, ...reply }, transfer);
     } catch (e) {
       postMessage({ type: 'error', id: data.id, ...describe(e) });

@@ -7,6 +7,8 @@
 //! - this file: `version`, `decodeImageInfo`
 //! - [`reconstruct`]: the pipeline for the page's Web Worker (`reconstruct`, `readExif`,
 //!   `resolveIntrinsics`, `pageDefaults`) and the result's pictures, clouds and export files
+//! - [`members`]: the fusion's members made in other workers (`reconstructUnfused`,
+//!   `memberInputs`, `memberVote`, `addVote`, `addFailure`, `fuse`)
 //! - [`decode`]: JPEG photos decoded straight to the working size in the worker (`decodeJpeg`)
 //! - [`ground_truth`]: scores of the result against the user's ground truth (`scoreDepth`,
 //!   `scoreFlow`, `errorPicture`)
@@ -23,6 +25,7 @@ use crate::image::Frame;
 pub mod decode;
 mod flow;
 pub mod ground_truth;
+pub mod members;
 pub mod memory;
 pub mod reconstruct;
 #[cfg(feature = "viewer")]

@@ -217,9 +217,28 @@ impl FrameBuilder {
 /// Reconstructs both frames: frame 1 (the reference) and frame 2 (consumed), `options` as
 /// JSON [`RunOptions`]. `progress(stage, fraction)`, when given, is called as stages start and
 /// finish (fraction in [0, 1] within the stage). Throws an `Error` named after the problem
-/// (module docs) with a readable message.
+/// (module docs) with a readable message. The fusion's members are made here, one after the
+/// other; [`reconstruct_unfused`] leaves them to other workers ([`super::members`]).
 #[wasm_bindgen]
 pub fn reconstruct(
+    frame1: FrameBuilder,
+    frame2: FrameBuilder,
+    options: &str,
+    progress: Option<Function>,
+) -> Result<PageReconstruction, JsValue> {
+    let mut result = reconstruct_unfused(frame1, frame2, options, progress.clone())?;
+    let params = result.rec.report.params;
+    crate::pipeline::fuse(&mut result.rec, &params, &mut progress_callback(progress));
+    result.finish();
+    Ok(result)
+}
+
+/// [`reconstruct`] without the fusion: the result is not finished until the members' votes
+/// are given to it and it is fused ([`super::members`]: `memberInputs`, `addVote`,
+/// `addFailure`, `fuse`); until then its clouds, pictures and files are those before the
+/// fusion.
+#[wasm_bindgen(js_name = reconstructUnfused)]
+pub fn reconstruct_unfused(
     frame1: FrameBuilder,
     frame2: FrameBuilder,
     options: &str,
@@ -272,7 +291,21 @@ pub fn reconstruct(
             "downscaled from {w}×{h} to {ww}×{wh} (as the page decoded the photos)"
         ));
     }
-    let mut report = |stage: Stage, fraction: f32| {
+    let mut report = progress_callback(progress);
+    let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
+    let rec = crate::pipeline::reconstruct_unfused(&pair, flow, &options.params, &mut report)
+        .map_err(js_error)?;
+    Ok(PageReconstruction {
+        rec,
+        ground_truth: GroundTruthScores::default(),
+        photo_size,
+        votes: Some(Vec::new()),
+    })
+}
+
+/// The pipeline's progress callback calling `progress(stage, fraction)` when given.
+fn progress_callback(progress: Option<Function>) -> impl FnMut(Stage, f32) {
+    move |stage: Stage, fraction: f32| {
         if let Some(callback) = &progress {
             // A throwing callback must not abort the reconstruction.
             let _ = callback.call2(
@@ -281,20 +314,7 @@ pub fn reconstruct(
                 &JsValue::from_f64(fraction.into()),
             );
         }
-    };
-    let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
-    let mut rec =
-        crate::reconstruct(&pair, flow, &options.params, &mut report).map_err(js_error)?;
-    // The outputs at the input size (depth files, flow.flo, the ground-truth scores) are at the
-    // photo's size, as if the library had downscaled it; the depth at that size is made when
-    // asked for (a 12-megapixel depth map is 48 MB of wasm memory the run itself does not need).
-    if let Some(size) = photo_size {
-        rec.report.input_size = size;
     }
-    Ok(PageReconstruction {
-        rec,
-        ground_truth: GroundTruthScores::default(),
-    })
 }
 
 /// A reconstruction kept in wasm memory; the worker takes what the page shows and downloads.
@@ -303,9 +323,26 @@ pub struct PageReconstruction {
     pub(super) rec: Reconstruction,
     /// Scores against the user's ground truth ([`super::ground_truth`]), added to the report.
     pub(super) ground_truth: GroundTruthScores,
+    /// The photos' own size when the page decoded them to the working size: the report's input
+    /// size once the reconstruction is finished ([`Self::finish`]).
+    photo_size: Option<(usize, usize)>,
+    /// Until fused ([`super::members`]): the members' votes given so far, in the order of their
+    /// counts (`Err`: why that member could not be made).
+    pub(super) votes: Option<Vec<Result<crate::soup::ensemble::Vote, String>>>,
 }
 
 impl PageReconstruction {
+    /// After the fusion: the outputs at the input size (depth files, flow.flo, the ground-truth
+    /// scores) are at the photo's size, as if the library had downscaled it; the depth at that
+    /// size is made when asked for (a 12-megapixel depth map is 48 MB of wasm memory the run
+    /// itself does not need).
+    pub(super) fn finish(&mut self) {
+        if let Some(size) = self.photo_size {
+            self.rec.report.input_size = size;
+        }
+        self.votes = None;
+    }
+
     /// Frame-1 depth at the input size (the photo's): the reconstruction's own, or, when the page
     /// decoded the photos at the working size, the soup's depth rendered at the photo's size
     /// with the intrinsics scaled to it.

@@ -208,6 +208,34 @@ test('cancel stops a run at once and the next run works', async () => {
   await page.context().close();
 });
 
+test('the fusion\'s members made in helper workers give the result of the worker alone', async () => {
+  // www/worker.js makes the members in helper workers (one per core, up to four workers in
+  // all); `?threads=1` makes them all in the pipeline's worker. The files are the same, byte
+  // for byte.
+  const runWith = async (query) => {
+    const { page, errors } = await openPage(session.browser, session.server.url, query);
+    await page.setInputFiles('#file-input', SAMPLE);
+    assert.equal(await waitForRunEnd(page), 'done', await alertText(page));
+    const { helpers } = await page.evaluate(() => window.soupPage.lastRun.worker);
+    const cores = await page.evaluate(() => navigator.hardwareConcurrency);
+    const depth = await download(page, 'depth.pfm');
+    const report = JSON.parse((await download(page, 'report.json')).toString('utf8'));
+    assert.deepEqual(errors, []);
+    await page.context().close();
+    return { helpers, cores, depth, report };
+  };
+  const alone = await runWith('?threads=1');
+  const helped = await runWith('?threads=2');
+  assert.equal(alone.helpers, 0);
+  assert.equal(helped.helpers, helped.cores >= 2 ? 1 : 0);
+  assert.ok(alone.depth.equals(helped.depth), 'the depth differs');
+  for (const key of ['ensemble', 'confidence', 'unconfident', 'refine']) {
+    assert.deepEqual(helped.report[key], alone.report[key], key);
+  }
+  assert.equal(alone.report.ensemble.counts.length, 4);
+  assert.deepEqual(alone.report.ensemble.failed, []);
+});
+
 test('two frames picked from a video', async () => {
   const { page, errors } = await openPage(session.browser, session.server.url);
   // A WebM recorded in the page: the sample's frame 1 until the recorder has delivered data,

@@ -87,6 +87,13 @@ function fillSummary(report) {
 
 export function fillTimings(report, run) {
   const rows = report.timings_ms.map(([stage, ms]) => [STAGE_LABELS[stage] ?? stage, ms]);
+  const members = report.ensemble?.counts.length ?? 0;
+  const ensemble = rows.find((_, i) => report.timings_ms[i][0] === 'ensemble');
+  if (ensemble !== undefined && members > 0) {
+    // The members are made by the worker and its helpers (www/worker.js).
+    const workers = 1 + (run.worker.helpers ?? 0);
+    ensemble[0] += ` (${members} members, ${workers} worker${workers === 1 ? '' : 's'})`;
+  }
   rows.unshift(['Reading the pixels (worker)', run.worker.pixelsMs]);
   rows.push(['Pictures and clouds (worker)', run.worker.collectMs]);
   rows.push(['Display (viewer, pictures)', run.showMs]);

@@ -12,6 +12,11 @@ const URL_OPTIONS = new URLSearchParams(location.search);
 export const BACKEND = URL_OPTIONS.get('backend') ?? 'auto';
 /** ?worker=full runs the pipeline with the full wasm build instead of the lean one. */
 export const WORKER_MODULE = URL_OPTIONS.get('worker') === 'full' ? 'full' : 'lean';
+/**
+ * ?threads=N: at most N workers make the fusion's members at once (www/worker.js; 1: the
+ * pipeline's worker alone, for measurements); null: as many as the machine's cores, up to 4.
+ */
+export const WORKER_THREADS = URL_OPTIONS.get('threads');
 
 export const page = {
   /** Defaults and names from the library (`pageDefaults`), once the worker is ready. */

@@ -4,7 +4,7 @@
 
 import { CancelledError, Pipeline } from '../pipeline.js';
 import {
-  $, WORKER_MODULE, begin, fail, freeArrays, page, sentence, setState, setStatus, showAlert,
+  $, WORKER_MODULE, WORKER_THREADS, begin, fail, freeArrays, page, sentence, setState, setStatus, showAlert,
 } from './ui.js';
 import { fillForm, readOptions } from './params.js';
 import { pixelsForRun } from './input.js';
@@ -12,9 +12,12 @@ import { fillTimings, showResult } from './results.js';
 import { resetTruth, scorePending } from './groundtruth.js';
 import { saveSession } from './persist.js';
 
-/** Share of the progress bar per stage (roughly their share of the time on a 1024 × 436 pair). */
+/**
+ * Share of the progress bar per stage (roughly their share of the time on a 1024 × 436 pair,
+ * with the fusion's members made by two workers).
+ */
 const STAGE_WEIGHTS = {
-  flow: 0.1, superpixels: 0.05, motion: 0.12, scales: 0.03, refine: 0.05, outputs: 0.02, ensemble: 0.63,
+  flow: 0.1, superpixels: 0.06, motion: 0.15, scales: 0.03, refine: 0.08, outputs: 0.02, ensemble: 0.56,
 };
 export const STAGE_LABELS = {
   flow: 'Optical flow',
@@ -49,7 +52,7 @@ export function startPipeline(onFirstReady) {
       showAlert(`The page cannot run here: ${message}. Build the module with ./serve.sh.`);
     },
     onProgress: (stage, fraction) => showProgress(stage, fraction),
-  }, WORKER_MODULE);
+  }, WORKER_MODULE, WORKER_THREADS);
   return page.pipeline;
 }
 
