@@ -269,7 +269,7 @@ pub fn reconstruct(
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
     let mut rec = reconstruct_unfused(pair, flow, params, progress)?;
-    fuse(&mut rec, params, progress);
+    fuse(&mut rec, progress);
     Ok(rec)
 }
 
@@ -646,13 +646,14 @@ fn unconfident(confidence: &[f64], params: &Params) -> usize {
     confidence.iter().filter(|&&c| c < min).count()
 }
 
-/// The fusion stage of [`reconstruct`] on a reconstruction of [`reconstruct_unfused`] with
-/// `params`: a [`member_vote`] for each of [`member_counts`] (natively several at once,
-/// `solve_members`), then [`fuse_votes`]. Reported to `progress` (and timed) as
-/// [`Stage::Ensemble`] even when `params.ensemble.members` is 1 and nothing is fused.
-pub fn fuse(rec: &mut Reconstruction, params: &Params, progress: &mut dyn FnMut(Stage, f32)) {
+/// The fusion stage of [`reconstruct`], once, on a reconstruction of [`reconstruct_unfused`]
+/// (with the parameters it was made with): a [`member_vote`] for each of [`member_counts`]
+/// (natively several at once, `solve_members`), then [`fuse_votes`]. Reported to `progress`
+/// (and timed) as [`Stage::Ensemble`] even when `ensemble.members` is 1 and nothing is fused.
+pub fn fuse(rec: &mut Reconstruction, progress: &mut dyn FnMut(Stage, f32)) {
     let start = now_ms();
     progress(Stage::Ensemble, 0.0);
+    let params = &rec.report.params;
     let counts = member_counts(params);
     let seen = rec.observed();
     let vote = |count: usize| member_vote(seen, params, count);
@@ -660,7 +661,7 @@ pub fn fuse(rec: &mut Reconstruction, params: &Params, progress: &mut dyn FnMut(
         progress(Stage::Ensemble, f)
     });
     let made = made.into_iter().map(|v| v.map_err(|e| e.to_string()));
-    fuse_votes(rec, params, made.collect(), now_ms() - start);
+    fuse_votes(rec, made.collect(), now_ms() - start);
     progress(Stage::Ensemble, 1.0);
 }
 
@@ -703,8 +704,8 @@ pub fn member_vote(seen: Observed, params: &Params, count: usize) -> Result<Vote
     Ok(vote_of(&solved.soup, labels, &confidence, seen.k, params))
 }
 
-/// Finishes a reconstruction of [`reconstruct_unfused`] with `params`: moves each piece of its
-/// soup to the weighted median scale of its own vote and the members' (`made`: one per
+/// Finishes a reconstruction of [`reconstruct_unfused`], once, with the parameters it was made
+/// with: moves each piece of its soup to the weighted median scale of its own vote and the members' (`made`: one per
 /// [`member_counts`], in their order; an `Err` holds why that member could not be made, and it
 /// is left out with a note in the report, as is a member `made` lacks), then makes its depth,
 /// confidence and report again from the fused soup. `members_ms` is the time the members took,
@@ -712,13 +713,12 @@ pub fn member_vote(seen: Observed, params: &Params, count: usize) -> Result<Vote
 /// (`ensemble.members` 1) only that time is recorded.
 pub fn fuse_votes(
     rec: &mut Reconstruction,
-    params: &Params,
     made: Vec<std::result::Result<Vote, String>>,
     members_ms: f64,
 ) {
-    let mut clock = Clock::start();
-    clock.last -= members_ms;
-    let counts = member_counts(params);
+    let mut clock = Clock::started_ms_ago(members_ms);
+    let params = rec.report.params;
+    let counts = member_counts(&params);
     let ensemble = (!counts.is_empty()).then(|| {
         let (mut votes, mut failed) = (Vec::new(), Vec::new());
         let made = made
@@ -732,17 +732,14 @@ pub fn fuse_votes(
         }
         let k = rec.report.camera.intrinsics;
         let labels = &rec.superpixels.labels;
-        let own = vote_of(&rec.soup, labels, &rec.report.confidence, &k, params);
+        let own = vote_of(&rec.soup, labels, &rec.report.confidence, &k, &params);
         let guess_weight = params.ensemble.guess_weight;
         let rescaled = fuse_scales(&mut rec.soup, &sampled(labels), &own, &votes, guess_weight);
-        let (confidence, depth, depth_input) = outputs(
-            rec.report.input_size,
-            &rec.soup,
-            &rec.scale_inputs(),
-            params,
-        );
+        let inputs = rec.scale_inputs();
+        let (confidence, depth, depth_input) =
+            outputs(rec.report.input_size, &rec.soup, &inputs, &params);
         (rec.depth, rec.depth_input) = (depth, depth_input);
-        rec.report.unconfident = unconfident(&confidence, params);
+        rec.report.unconfident = unconfident(&confidence, &params);
         rec.report.confidence = confidence;
         EnsembleReport {
             counts,
@@ -1027,6 +1024,13 @@ impl Clock {
             last: now_ms(),
             laps: Vec::new(),
         }
+    }
+
+    /// A clock whose first lap counts `ms` milliseconds more (work timed elsewhere).
+    fn started_ms_ago(ms: f64) -> Self {
+        let mut clock = Clock::start();
+        clock.last -= ms;
+        clock
     }
 
     /// Records the milliseconds since the previous lap as `stage`'s.

@@ -516,7 +516,7 @@ fn the_fusion_made_in_steps_is_the_fusion_made_at_once() {
         let votes = (counts.iter().enumerate())
             .map(|(i, &c)| made(i, c))
             .collect();
-        fuse_votes(&mut rec, &params, votes, 0.0);
+        fuse_votes(&mut rec, votes, 0.0);
         rec
     };
     let vote = |count| member_vote(at_once.observed(), &params, count).map_err(|e| e.to_string());

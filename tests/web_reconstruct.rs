@@ -391,7 +391,7 @@ fn members_made_in_other_workers_fuse_to_the_same_result() {
     let mut parts =
         reconstruct_unfused(builder(&s.frame1), builder(&s.frame2), &options, None).unwrap();
     let inputs = parts.member_inputs();
-    let counts = inputs.counts().to_vec();
+    let counts = parts.member_counts().to_vec();
     assert_eq!(counts, vec![140, 160, 130, 170]);
     let (frame, flow, reliable) = (
         inputs.frame().to_vec(),
@@ -428,6 +428,16 @@ fn members_made_in_other_workers_fuse_to_the_same_result() {
         ))
         .unwrap();
     }
+    // A fifth vote, or one of another size, is refused.
+    let v = helper.vote(150).unwrap();
+    let (depth, pinned) = (v.depth().to_vec(), v.pinned().to_vec());
+    let refused = parts.add_vote(v.width(), v.height(), &depth, &pinned);
+    assert!(name_and_message(refused.unwrap_err()).1.contains("all in"));
+    let refused = parts.add_vote(v.width() - 1, v.height(), &depth, &pinned);
+    assert_eq!(
+        name_and_message(refused.unwrap_err()).0,
+        "InvalidParameterError"
+    );
     parts.fuse(12.0).unwrap();
     for file in ["depth.pfm", "frame1.ply", "frame2.ply", "flow.flo"] {
         assert_eq!(

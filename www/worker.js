@@ -34,7 +34,8 @@
 //       → { type: 'vote', id, index, vote: { width, height, depth, pinned } | error }… (one per
 //       count, `index` its place in `counts`), then a reply (a helper's request)
 // Unasked: { type: 'ready', version, defaults } once the module is loaded; { type: 'failed',
-// message } when it cannot be loaded.
+// message } when it cannot be loaded. A helper (`?helper=1`) first posts { type: 'waiting' }
+// and loads the module it is then sent, { type: 'module', module: WebAssembly.Module }.
 // Errors: { type: 'error', id, name, message, fatal }. `fatal` means the wasm instance aborted
 // (out of memory, or a bug) and is unusable: the page replaces the worker. An out-of-memory abort
 // is named OutOfMemoryError.
@@ -113,7 +114,9 @@ async function run(id, { frames, options, quiet = false }) {
     made = soup.reconstructUnfused(one, two, json, progress);
     await fuseMembers(made, json, helpers, progress);
   } catch (e) {
-    made?.free();
+    if (!describe(e).fatal) {
+      made?.free(); // after a crash the instance is unusable, and so is freeing
+    }
     throw e;
   } finally {
     helpers.forEach((helper) => helper.terminate());
@@ -253,7 +256,9 @@ async function fuseMembers(result, json, helpers, progress) {
   const here = (index) => settle(index, takeVote(() => result.memberVote(counts[index])));
   for (const index of mine(0)) {
     here(index);
-    await nextTask(); // the helpers' votes come in (progress)
+    if (helpers.length > 0) {
+      await nextTask(); // the helpers' votes come in (progress)
+    }
   }
   await Promise.all(asked);
   votes.forEach((vote, index) => vote === null && here(index));
@@ -265,6 +270,7 @@ async function fuseMembers(result, json, helpers, progress) {
     }
   }
   result.fuse(performance.now() - start);
+  progress?.('ensemble', 1);
 }
 
 /**
@@ -310,7 +316,7 @@ function takeVote(make) {
  * Sends each helper (loaded) what the members are made from (copies; the last one is given
  * this worker's) and its members (`mine(k + 1)`, indices into `counts`); `settle(index, vote)`
  * gets each vote as it comes. One promise per helper, resolved when it is done or crashed (its
- * members without a vote are then made here).
+ * members without a vote are then made here); the helper is terminated then.
  */
 function askHelpers(result, json, helpers, counts, mine, settle) {
   const inputs = result.memberInputs();
@@ -322,16 +328,21 @@ function askHelpers(result, json, helpers, counts, mine, settle) {
   const buffers = [source.intrinsics, source.frame, source.flow, source.reliable].map((a) => a.buffer);
   return helpers.map((helper, k) => new Promise((resolve) => {
     const indices = mine(k + 1);
+    const end = () => {
+      helper.terminate(); // its memory back now, not at the end of the run
+      resolve();
+    };
     helper.onmessage = ({ data }) => {
       if (data.type === 'vote') {
         settle(indices[data.index], data.vote);
       } else {
-        resolve(); // the reply, or an error
+        end(); // the reply, or an error
       }
     };
+    helper.onmessageerror = end;
     helper.onerror = (event) => {
       event.preventDefault();
-      resolve();
+      end();
     };
     const transfer = k === helpers.length - 1 ? buffers : [];
     helper.postMessage({ type: 'members', id: 0, source, counts: indices.map((i) => counts[i]) }, transfer);
@@ -461,13 +472,18 @@ async function main() {
     postMessage({ type: 'failed', message: `could not load the WebAssembly module: ${e.message ?? e}` });
     return;
   }
-  onmessage = async ({ data }) => {
-    try {
-      const [reply, transfer = []] = await handle(data);
-      postMessage({ type: 'reply', id: data.id, ...reply }, transfer);
-    } catch (e) {
-      postMessage({ type: 'error', id: data.id, ...describe(e) });
-    }
+  // One request at a time, in order: a run waits for its helpers, and a request that comes
+  // meanwhile (a cloud, an export) waits for the run's result rather than finding none.
+  let queue = Promise.resolve();
+  onmessage = ({ data }) => {
+    queue = queue.then(async () => {
+      try {
+        const [reply, transfer = []] = await handle(data);
+        postMessage({ type: 'reply', id: data.id, ...reply }, transfer);
+      } catch (e) {
+        postMessage({ type: 'error', id: data.id, ...describe(e) });
+      }
+    });
   };
   postMessage({ type: 'ready', version: soup.version(), defaults: JSON.parse(soup.pageDefaults()) });
 }

@@ -6,13 +6,14 @@
 //!
 //! ```js
 //! const result = reconstructUnfused(one, two, optionsJson, progress); // the kept pass
-//! const inputs = result.memberInputs();        // counts, frame, flow, reliable, intrinsics
-//! // in each helper worker, for some of inputs.counts:
+//! const counts = result.memberCounts();        // the members' superpixel counts
+//! const inputs = result.memberInputs();        // frame, flow, reliable, intrinsics
+//! // in each helper worker, for some of the counts:
 //! const source = new MemberSource(optionsJson, inputs.width, inputs.height,
 //!                                 inputs.intrinsics, inputs.frame, inputs.flow, inputs.reliable);
 //! const vote = source.vote(count);
 //! // in the first worker, for the others: result.memberVote(count)
-//! // there, one per count in the order of inputs.counts:
+//! // there, one per count in the order of the counts:
 //! result.addVote(vote.width, vote.height, vote.depth, vote.pinned); // or addFailure(message)
 //! result.fuse(membersMs);                      // the finished result, as reconstruct()'s
 //! ```
@@ -31,16 +32,15 @@ use crate::error::Error;
 use crate::flow::FlowField;
 use crate::image::Frame;
 use crate::pipeline::{Observed, Params, fuse_votes, member_counts, member_vote};
-use crate::soup::ensemble::Vote;
+use crate::soup::ensemble::{SAMPLE_STRIDE, Vote};
 
 /// What the members of a run are made from, as JavaScript arrays (copies, to post to other
 /// workers): the kept reconstruction's frame 1, flow and trusted vectors at the working
-/// resolution, its intrinsics and the members' superpixel counts.
+/// resolution and its intrinsics.
 #[wasm_bindgen]
 pub struct MemberInputs {
     width: u32,
     height: u32,
-    counts: Uint32Array,
     intrinsics: Float64Array,
     frame: Uint8Array,
     flow: Float32Array,
@@ -59,13 +59,6 @@ impl MemberInputs {
     #[wasm_bindgen(getter)]
     pub fn height(&self) -> u32 {
         self.height
-    }
-
-    /// `Uint32Array`, the members' superpixel counts, in the order the votes are added (empty
-    /// when the options fuse no members).
-    #[wasm_bindgen(getter)]
-    pub fn counts(&self) -> Uint32Array {
-        self.counts.clone()
     }
 
     /// `Float64Array` `[fx, fy, cx, cy]`, the intrinsics at the working resolution (pixels).
@@ -118,7 +111,7 @@ impl VoteBuffers {
         self.height
     }
 
-    /// `Float32Array`, the depth per sampled pixel (any global scale; NaN = unknown).
+    /// `Float32Array`, the depth per sampled pixel (any global scale; NaN or ≤ 0 = unknown).
     #[wasm_bindgen(getter)]
     pub fn depth(&self) -> Float32Array {
         self.depth.clone()
@@ -178,10 +171,10 @@ impl MemberSource {
                 ))));
             }
         }
-        // Each array is dropped once converted: the members reuse its memory.
-        let frame = Grid::from_vec(w, h, frame.chunks_exact(3).map(rgb).collect());
-        let flow = Grid::from_vec(w, h, flow.chunks_exact(2).map(|v| [v[0], v[1]]).collect());
-        let reliable = Grid::from_vec(w, h, reliable.iter().map(|&r| r != 0).collect());
+        // Each array is dropped once converted (`grid` takes it): the members reuse its memory.
+        let frame = grid(w, h, frame, |v| [v[0], v[1], v[2]], 3);
+        let flow = grid(w, h, flow, |v| [v[0], v[1]], 2);
+        let reliable = grid(w, h, reliable, |v| v[0] != 0, 1);
         Ok(MemberSource {
             frame: frame.map_err(js_error)?,
             k: Intrinsics { fx, fy, cx, cy },
@@ -217,9 +210,16 @@ fn vote_buffers(seen: Observed, params: &Params, count: u32) -> Result<VoteBuffe
     })
 }
 
-/// Three bytes as a pixel.
-fn rgb(bytes: &[u8]) -> [u8; 3] {
-    [bytes[0], bytes[1], bytes[2]]
+/// A `w × h` grid of `values`, `per_pixel` of them per pixel made into one by `pixel`
+/// (`values` has `per_pixel · w · h`, checked by the caller); `values` is dropped on return.
+fn grid<T: Copy, P>(
+    w: usize,
+    h: usize,
+    values: Vec<T>,
+    pixel: impl Fn(&[T]) -> P,
+    per_pixel: usize,
+) -> crate::Result<Grid<P>> {
+    Grid::from_vec(w, h, values.chunks_exact(per_pixel).map(pixel).collect())
 }
 
 /// Thrown by the fusion's methods on a result that is already finished.
@@ -227,6 +227,21 @@ fn finished() -> JsValue {
     js_error(Error::InvalidParameter(
         "this reconstruction is finished: its members were fused".into(),
     ))
+}
+
+impl PageReconstruction {
+    /// Adds the next member's vote; throws when the result is finished or has all its votes.
+    fn push_vote(&mut self, vote: Result<Vote, String>) -> Result<(), JsValue> {
+        let members = member_counts(&self.rec.report.params).len();
+        let votes = self.votes.as_mut().ok_or_else(finished)?;
+        if votes.len() >= members {
+            return Err(js_error(Error::InvalidParameter(format!(
+                "this run fuses {members} members; their votes are all in"
+            ))));
+        }
+        votes.push(vote);
+        Ok(())
+    }
 }
 
 #[wasm_bindgen]
@@ -259,7 +274,6 @@ impl PageReconstruction {
         MemberInputs {
             width: w as u32,
             height: h as u32,
-            counts: self.member_counts(),
             intrinsics: Float64Array::from([k.fx, k.fy, k.cx, k.cy].as_slice()),
             frame: Uint8Array::from(seen.frame1.data().as_flattened()),
             flow: Float32Array::from(seen.flow.data().as_flattened()),
@@ -268,7 +282,7 @@ impl PageReconstruction {
     }
 
     /// Adds the next member's vote (its [`VoteBuffers`]' `width`, `height`, `depth`, `pinned`),
-    /// in the order of [`MemberInputs::counts`]. Throws when the arrays do not fit the size or
+    /// in the order of [`Self::member_counts`]. Throws when the arrays do not fit the size or
     /// the result is finished.
     #[wasm_bindgen(js_name = addVote)]
     pub fn add_vote(
@@ -279,21 +293,26 @@ impl PageReconstruction {
         pinned: &[u8],
     ) -> Result<(), JsValue> {
         let (w, h) = (width as usize, height as usize);
+        let (sw, sh) = self.rec.frame1.size();
+        let s = SAMPLE_STRIDE;
+        if (w, h) != (sw.div_ceil(s), sh.div_ceil(s)) {
+            return Err(js_error(Error::InvalidParameter(format!(
+                "a member's vote is {w}×{h}; this run's are {}×{}",
+                sw.div_ceil(s),
+                sh.div_ceil(s)
+            ))));
+        }
         let depth = Grid::from_vec(w, h, depth.to_vec()).map_err(js_error)?;
         let pinned = pinned.iter().map(|&p| p != 0).collect();
         let pinned = Grid::from_vec(w, h, pinned).map_err(js_error)?;
-        let votes = self.votes.as_mut().ok_or_else(finished)?;
-        votes.push(Ok(Vote { depth, pinned }));
-        Ok(())
+        self.push_vote(Ok(Vote { depth, pinned }))
     }
 
     /// Adds the next member as one that could not be made, with why (`message`); the fusion
     /// leaves it out and the report says so. Throws when the result is finished.
     #[wasm_bindgen(js_name = addFailure)]
     pub fn add_failure(&mut self, message: &str) -> Result<(), JsValue> {
-        let votes = self.votes.as_mut().ok_or_else(finished)?;
-        votes.push(Err(message.to_string()));
-        Ok(())
+        self.push_vote(Err(message.to_string()))
     }
 
     /// Fuses the votes added (a member without one is left out, with a note) and finishes the
@@ -301,8 +320,7 @@ impl PageReconstruction {
     /// the members took, counted in the report's fusion time. Throws when already finished.
     pub fn fuse(&mut self, members_ms: f64) -> Result<(), JsValue> {
         let votes = self.votes.take().ok_or_else(finished)?;
-        let params = self.rec.report.params;
-        fuse_votes(&mut self.rec, &params, votes, members_ms);
+        fuse_votes(&mut self.rec, votes, members_ms);
         self.finish();
         Ok(())
     }

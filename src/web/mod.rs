@@ -5,10 +5,12 @@
 //! No algorithm lives here.
 //!
 //! - this file: `version`, `decodeImageInfo`
-//! - [`reconstruct`]: the pipeline for the page's Web Worker (`reconstruct`, `readExif`,
+//! - [`reconstruct`]: the pipeline for the page's Web Worker (`reconstruct`,
+//!   `reconstructUnfused`, `readExif`,
 //!   `resolveIntrinsics`, `pageDefaults`) and the result's pictures, clouds and export files
-//! - [`members`]: the fusion's members made in other workers (`reconstructUnfused`,
-//!   `memberInputs`, `memberVote`, `addVote`, `addFailure`, `fuse`)
+//! - [`members`]: the fusion's members made in other workers (after `reconstructUnfused`:
+//!   `memberCounts`, `memberVote`, `memberInputs`, `MemberSource`, `addVote`, `addFailure`,
+//!   `fuse`)
 //! - [`decode`]: JPEG photos decoded straight to the working size in the worker (`decodeJpeg`)
 //! - [`ground_truth`]: scores of the result against the user's ground truth (`scoreDepth`,
 //!   `scoreFlow`, `errorPicture`)

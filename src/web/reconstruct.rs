@@ -227,8 +227,7 @@ pub fn reconstruct(
     progress: Option<Function>,
 ) -> Result<PageReconstruction, JsValue> {
     let mut result = reconstruct_unfused(frame1, frame2, options, progress.clone())?;
-    let params = result.rec.report.params;
-    crate::pipeline::fuse(&mut result.rec, &params, &mut progress_callback(progress));
+    crate::pipeline::fuse(&mut result.rec, &mut progress_callback(progress));
     result.finish();
     Ok(result)
 }
