@@ -30,11 +30,16 @@ pub struct FramePair {
 impl FramePair {
     /// Working size divided by input size, `(sx, sy)`.
     pub fn scale(&self) -> (f64, f64) {
-        (
-            self.frame1.width() as f64 / self.input_size.0 as f64,
-            self.frame1.height() as f64 / self.input_size.1 as f64,
-        )
+        working_over_input(self.frame1.size(), self.input_size)
     }
+}
+
+/// `working` size divided by `input` size (both `(width, height)` in pixels), `(sx, sy)`.
+pub fn working_over_input(working: (usize, usize), input: (usize, usize)) -> (f64, f64) {
+    (
+        working.0 as f64 / input.0 as f64,
+        working.1 as f64 / input.1 as f64,
+    )
 }
 
 /// Checks a pair of decoded images and brings them to the working resolution.

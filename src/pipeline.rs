@@ -12,7 +12,7 @@ use crate::flow::{
 };
 use crate::grid::Grid;
 use crate::image::Frame;
-use crate::input::FramePair;
+use crate::input::{FramePair, working_over_input};
 use crate::output::{PointCloud, dense_depth, depth_at, point_clouds, scene_flow, strided_depth};
 use crate::soup::Soup;
 use crate::soup::ensemble::{
@@ -631,11 +631,7 @@ fn outputs(
     let confidence = depth_confidence(soup, inputs, &params.scales);
     let depth = dense_depth(soup, labels, k);
     let (iw, ih) = input_size;
-    // Working size over input size, as FramePair::scale.
-    let (sx, sy) = (
-        labels.width() as f64 / iw as f64,
-        labels.height() as f64 / ih as f64,
-    );
+    let (sx, sy) = working_over_input(labels.size(), input_size);
     let depth_input = depth_at(soup, labels, iw, ih, &k.scaled(1.0 / sx, 1.0 / sy));
     (confidence, depth, depth_input)
 }

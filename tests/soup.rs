@@ -253,6 +253,11 @@ fn pair_of(a: &Frame, b: &Frame, k: Intrinsics) -> superpixel_soup::input::Frame
     prepare_pair(a.clone().into(), b.clone().into(), Some(k), 1024).unwrap()
 }
 
+/// The bits of `rec`'s frame-1 depth (equal only when every value is the same float).
+fn depth_bits(rec: &Reconstruction) -> Vec<u32> {
+    rec.depth.data().iter().map(|z| z.to_bits()).collect()
+}
+
 /// The reconstruction of a synthetic scene's two frames with `flow` and `params`.
 fn reconstruct_scene(s: &SynthScene, flow: FlowInput, params: &Params) -> Reconstruction {
     reconstruct(
@@ -523,14 +528,7 @@ fn the_fusion_made_in_steps_is_the_fusion_made_at_once() {
     let in_steps = steps(&|_, count| vote(count));
     assert_eq!(in_steps.report.ensemble, at_once.report.ensemble);
     assert_eq!(in_steps.soup.pieces, at_once.soup.pieces);
-    let bits = |rec: &Reconstruction| {
-        rec.depth
-            .data()
-            .iter()
-            .map(|z| z.to_bits())
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(bits(&in_steps), bits(&at_once));
+    assert_eq!(depth_bits(&in_steps), depth_bits(&at_once));
     assert_eq!(in_steps.report.confidence, at_once.report.confidence);
     assert!(
         in_steps
@@ -620,14 +618,7 @@ fn a_reconstruction_that_pins_too_little_is_made_again_from_finer_flow() {
         assert!(notes[2].contains("made again"), "{notes:?}");
     }
     // Made again or held, the kept pass is the one a single pass with its preset gives.
-    let bits = |r: &Reconstruction| {
-        r.depth
-            .data()
-            .iter()
-            .map(|z| z.to_bits())
-            .collect::<Vec<_>>()
-    };
-    assert_eq!(bits(&always), bits(&kept));
+    assert_eq!(depth_bits(&always), depth_bits(&kept));
     // The stage timings are the sums over the passes, one entry per stage.
     let stages: Vec<Stage> = always.report.timings_ms.iter().map(|t| t.0).collect();
     assert_eq!(stages, Stage::ALL.to_vec());

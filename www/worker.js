@@ -161,9 +161,9 @@ function threadsFor(options, quiet, width, height) {
     return 1;
   }
   // Options that do not say take the library's defaults.
-  const defaults = () => JSON.parse(soup.pageDefaults()).options;
-  const members = options?.params?.ensemble?.members ?? defaults().params.ensemble.members;
-  const maxSide = options?.maxSide ?? defaults().maxSide;
+  const defaults = JSON.parse(soup.pageDefaults()).options;
+  const members = options?.params?.ensemble?.members ?? defaults.params.ensemble.members;
+  const maxSide = options?.maxSide ?? defaults.maxSide;
   const shrink = Math.min(1, maxSide / Math.max(width, height));
   const helperMiB = HELPER_MIB + (HELPER_BYTES_PER_PIXEL * width * height * shrink * shrink) / 2 ** 20;
   const threads = Number(SEARCH.get('threads'));
