@@ -121,6 +121,17 @@ impl Default for Params {
     }
 }
 
+impl Params {
+    /// These parameters with the fusion members' cheaper refinement (`ensemble.member_iterations`
+    /// iterations of `ensemble.member_particles` particles), as each member and the page's kept
+    /// pass run it.
+    pub fn with_member_refinement(mut self) -> Params {
+        self.refine.iterations = self.ensemble.member_iterations;
+        self.refine.particles = self.ensemble.member_particles;
+        self
+    }
+}
+
 /// Where the flow 1→2 comes from. Every source yields the same two things for the later
 /// stages: a flow field at the working resolution and a mask of the vectors to trust.
 #[derive(Clone, Debug)]
@@ -687,11 +698,8 @@ pub fn member_vote(seen: Observed, params: &Params, count: usize) -> Result<Vote
             seen.reliable.size()
         )));
     }
-    let ensemble = &params.ensemble;
-    let mut member = *params;
+    let mut member = params.with_member_refinement();
     member.superpixels.count = count;
-    member.refine.iterations = ensemble.member_iterations;
-    member.refine.particles = ensemble.member_particles;
     let solved = solve_soup(seen, &member, None, &mut Clock::start(), &mut |_, _| {})?;
     let segmentation = &solved.segmentation;
     let inputs = segmentation.scale_inputs(seen.flow, seen.reliable, seen.k);

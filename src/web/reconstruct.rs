@@ -86,10 +86,7 @@ pub const PAGE_FLOW_PRESET: Preset = Preset::Medium;
 /// (FlyingThings3D 0.338 → 0.342, street 0.023 → 0.025, the rest within 0.002). The
 /// parameters panel starts from these; the library's 6 and 16 can be typed in there.
 pub fn page_params() -> Params {
-    let mut params = Params::default();
-    params.refine.iterations = params.ensemble.member_iterations;
-    params.refine.particles = params.ensemble.member_particles;
-    params
+    Params::default().with_member_refinement()
 }
 
 impl Default for RunOptions {
