@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Robustness of the soup's defaults: every numeric parameter of the scale solve, the
-refinement and the fusion (`ensemble`) is moved by -20 % and +20 % in turn (one at a time, integers rounded), and the MRE of
+"""Robustness of the soup's defaults: every numeric parameter of the unit-scale soup (`init`), the
+scale solve, the refinement and the fusion (`ensemble`) is moved by -20 % and +20 % in turn (one at a time, integers rounded), and the MRE of
 each evaluation case is compared with the MRE at the defaults. Prints a Markdown table: per
 parameter, the largest change of any case's MRE and the case it happened on.
 
@@ -13,7 +13,7 @@ measured at the default seeds alone mostly measures which draw it lands on.
 
 Cases are evaluation folders: the synthetic scenes of `soup synth` and, when present, the public
 cases in ../shared/eval/. Each run of `soup eval` takes the cases' time (seconds per case), so a
-full sweep over ~16 parameters takes about (1 + 2 × 16) evaluations.
+full sweep over ~48 parameters takes about (1 + 2 × 48) evaluations.
 """
 
 import json
@@ -106,7 +106,7 @@ def main():
     print()
     print("| parameter | default | −20 % | +20 % | largest MRE change | on case |")
     print("| --- | --- | --- | --- | --- | --- |")
-    for group in ("scales", "refine", "ensemble"):
+    for group in ("init", "scales", "refine", "ensemble"):
         for name, value in params[group].items():
             if name in SKIP or isinstance(value, bool) or not isinstance(value, (int, float)):
                 continue
