@@ -9,7 +9,8 @@ use superpixel_soup::error::Error;
 use superpixel_soup::eval::{eval_case_dir, flow_metrics};
 use superpixel_soup::flow::colour::{flow_picture, max_radius, vector_colour};
 use superpixel_soup::flow::consistency::forward_backward_mask;
-use superpixel_soup::flow::{FlowField, FlowPair, FlowParams, Preset, compute_flow};
+use superpixel_soup::flow::edges::boundary_band;
+use superpixel_soup::flow::{EdgeParams, FlowField, FlowPair, FlowParams, Preset, compute_flow};
 use superpixel_soup::formats::case::read_case;
 use superpixel_soup::formats::flo;
 use superpixel_soup::grid::Grid;
@@ -174,6 +175,62 @@ fn synthetic_scenes_match_their_exact_flow() {
             kind.name()
         );
     }
+}
+
+/// Mean end-point error of `est` against `truth` over the pixels where `mask` is true and the
+/// truth is known, and their count.
+fn masked_epe(est: &FlowField, truth: &FlowField, mask: &Grid<bool>) -> (f32, usize) {
+    let errors: Vec<f32> = est
+        .data()
+        .iter()
+        .zip(truth.data())
+        .zip(mask.data())
+        .filter(|&((_, t), &m)| m && t[0].is_finite() && t[1].is_finite())
+        .map(|((e, t), _)| (e[0] - t[0]).hypot(e[1] - t[1]))
+        .collect();
+    (
+        errors.iter().sum::<f32>() / errors.len().max(1) as f32,
+        errors.len(),
+    )
+}
+
+#[test]
+fn sharpened_motion_edges_lower_the_error_next_to_them() {
+    // The crowd at 512 × 218: walkers crossing in front of a room. Near the exact flow's motion
+    // edges (within 3 px) the smear of patch-based flow is most of the error; the sharpening
+    // must cut it there and not raise the error anywhere else on average. Measured: 2.23 → 1.70
+    // px on the 18 145 pixels near the edges, 0.325 → 0.295 px elsewhere.
+    let scene = render(SceneKind::Crowd, 512, 218).unwrap();
+    let sharp = compute_flow(&scene.frame1, &scene.frame2, &medium(), &mut |_| {}).unwrap();
+    let plain_params = FlowParams {
+        edges: EdgeParams {
+            band: 0,
+            ..EdgeParams::default()
+        },
+        ..medium()
+    };
+    let plain = compute_flow(&scene.frame1, &scene.frame2, &plain_params, &mut |_| {}).unwrap();
+    let near = boundary_band(
+        &scene.flow12,
+        &EdgeParams {
+            band: 3,
+            ..EdgeParams::default()
+        },
+    );
+    let far = near.map(|&n| !n);
+    let (near_sharp, count) = masked_epe(&sharp.forward, &scene.flow12, &near);
+    let (near_plain, _) = masked_epe(&plain.forward, &scene.flow12, &near);
+    let (far_sharp, _) = masked_epe(&sharp.forward, &scene.flow12, &far);
+    let (far_plain, _) = masked_epe(&plain.forward, &scene.flow12, &far);
+    assert!(count > 2000, "only {count} pixels near motion edges");
+    assert!(
+        near_sharp < 0.9 * near_plain,
+        "near the edges: {near_plain} → {near_sharp}"
+    );
+    assert!(
+        far_sharp <= far_plain,
+        "elsewhere: {far_plain} → {far_sharp}"
+    );
 }
 
 #[test]

@@ -1,8 +1,9 @@
 //! Dense optical flow between two frames, and the flow field type shared by every stage.
 //!
 //! [`compute_flow`] runs DIS ([`dis`]: coarse-to-fine patch search, densification and
-//! [`variational`] refinement on a grey [`pyramid`]) from frame 1 to frame 2 and back, and marks
-//! the vectors that survive the forward–backward check ([`consistency`]). [`colour`] draws a
+//! [`variational`] refinement on a grey [`pyramid`]) from frame 1 to frame 2 and back, moves
+//! each field's motion boundaries onto its frame's colour edges ([`edges`]), and marks the
+//! vectors that survive the forward–backward check ([`consistency`]). [`colour`] draws a
 //! field with the Middlebury colour wheel.
 //!
 //! Conventions: flow f(u, v) = (u′ − u, v′ − v) maps a pixel of frame 1 to frame 2, pixel centres
@@ -12,11 +13,13 @@
 pub mod colour;
 pub mod consistency;
 pub mod dis;
+pub mod edges;
 mod lanes;
 pub mod pyramid;
 pub mod variational;
 
 pub use dis::{DisParams, Preset};
+pub use edges::EdgeParams;
 
 use crate::error::{Error, Result};
 use crate::grid::Grid;
@@ -81,6 +84,8 @@ pub struct FlowParams {
     pub fb_threshold: f32,
     /// Part of the tolerance that grows with the motion: this share of ‖f(x)‖.
     pub fb_relative: f32,
+    /// How motion boundaries are sharpened along colour edges before the check.
+    pub edges: EdgeParams,
 }
 
 impl FlowParams {
@@ -93,12 +98,14 @@ impl FlowParams {
             dis: DisParams::preset(preset),
             fb_threshold: 0.5,
             fb_relative: 0.02,
+            edges: EdgeParams::default(),
         }
     }
 
     /// Fails with [`Error::InvalidParameter`] for values the algorithm cannot run with.
     pub fn validate(&self) -> Result<()> {
         self.dis.validate()?;
+        self.edges.validate()?;
         if !(self.fb_threshold >= 0.0 && self.fb_relative >= 0.0) {
             return Err(Error::InvalidParameter(format!(
                 "forward–backward tolerance {} px + {}·|f| must be ≥ 0",
@@ -177,23 +184,29 @@ pub fn compute_flow(
     progress(0.0);
     let pyramid1 = pyramid::build(&to_gray(frame1), finest, coarsest);
     let pyramid2 = pyramid::build(&to_gray(frame2), finest, coarsest);
-    let mut run = |from: &[pyramid::Level], to: &[pyramid::Level], offset: f32| {
+    // DIS on the finest level it computes, motion edges sharpened there (with the colour frame
+    // at that level, in that level's pixels), then brought to full resolution.
+    let (lw, lh) = pyramid::level_size(w, h, finest);
+    let mut run = |from: &[pyramid::Level], to: &[pyramid::Level], colour: &Frame, offset: f32| {
         let (u, v) = dis::dis_flow(from, to, &params.dis, &mut |f| progress(offset + 0.5 * f));
-        let (lw, lh) = pyramid::level_size(w, h, finest);
+        let data = u.iter().zip(&v).map(|(&u, &v)| [u, v]).collect();
+        let level = edges::sharpen_motion_edges(
+            &Grid::from_vec(lw, lh, data)?,
+            &edges::halve_frame(colour, finest),
+            &params.edges,
+        )?;
+        if finest == 0 {
+            return Ok(level);
+        }
         let factor = (1u32 << finest) as f32;
-        let (u, v) = if finest == 0 {
-            (u, v)
-        } else {
-            (
-                pyramid::upsample(&u, lw, lh, w, h, factor),
-                pyramid::upsample(&v, lw, lh, w, h, factor),
-            )
-        };
+        let (u, v): (Vec<f32>, Vec<f32>) = level.data().iter().map(|f| (f[0], f[1])).unzip();
+        let u = pyramid::upsample(&u, lw, lh, w, h, factor);
+        let v = pyramid::upsample(&v, lw, lh, w, h, factor);
         let data = u.into_iter().zip(v).map(|(u, v)| [u, v]).collect();
         Grid::from_vec(w, h, data)
     };
-    let forward = run(&pyramid1, &pyramid2, 0.0)?;
-    let backward = run(&pyramid2, &pyramid1, 0.5)?;
+    let forward = run(&pyramid1, &pyramid2, frame1, 0.0)?;
+    let backward = run(&pyramid2, &pyramid1, frame2, 0.5)?;
     let reliable = consistency::forward_backward_mask(
         &forward,
         &backward,
