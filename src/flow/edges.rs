@@ -40,21 +40,32 @@ pub struct EdgeParams {
     /// Pixels within this Chebyshev distance (px) of a boundary are estimated again; 0 turns
     /// the sharpening off. 3 px: the smear's median error falls to 0.3–0.8 px at 2.5–3.5 px from
     /// the boundary; bands of 2 and 5 px gave the soup a higher error than 3 (the crowd 0.122 and
-    /// 0.123 against 0.101).
+    /// 0.123 against 0.101 over five seeds, measured with an earlier form that sharpened after
+    /// upsampling to full resolution).
     pub band: usize,
-    /// Half-size (px) of the voting window: 7 reaches 4 px past the band into the interiors.
+    /// Half-size (px) of the voting window: 7 reaches 4 px past the band into the interiors. At
+    /// most [`MAX_RADIUS`].
     pub radius: usize,
     /// Colour scale σ_c of the vote weights exp(−ΔE² / 2σ_c²), CIELAB units: 7 (Sun et al.'s
-    /// value); 14 mixed more across colour edges (the table 0.021 → 0.023, FlyingThings3D 0.32
-    /// → 0.36).
+    /// value); 14 mixed more across colour edges (over five seeds, in the earlier form above: the
+    /// table 0.0208 → 0.0227, FlyingThings3D 0.316 → 0.358). At least [`MIN_SIGMA_COLOUR`].
     pub sigma_colour: f32,
     /// Spatial scale σ_s (px) of the vote weights exp(−d² / 2σ_s²): 7, about the window.
     pub sigma_space: f32,
     /// Weight factor of votes from pixels inside the band (their own flow is the smeared one).
     /// 0.05: low enough that interiors outvote them, high enough that a thin part with no
-    /// interior within reach (a leg, a pole) keeps its own flow; 0.01 gave FlyingThings3D 0.39.
+    /// interior within reach (a leg, a pole) keeps its own flow; 0.01 gave FlyingThings3D 0.386
+    /// against 0.316 over five seeds (earlier form).
     pub band_vote: f32,
 }
+
+/// The largest window half-size [`EdgeParams::validate`] accepts (px): 32 already costs 20×
+/// the default's votes.
+pub const MAX_RADIUS: usize = 32;
+
+/// The smallest colour scale σ_c [`EdgeParams::validate`] accepts (CIELAB units): below it the
+/// weight table's scale overflows, and no colour difference under one unit means anything.
+pub const MIN_SIGMA_COLOUR: f32 = 0.01;
 
 impl Default for EdgeParams {
     fn default() -> Self {
@@ -99,6 +110,18 @@ impl EdgeParams {
             return Err(Error::InvalidParameter(format!(
                 "motion-edge band vote = {} must be in (0, 1]",
                 self.band_vote
+            )));
+        }
+        if self.radius > MAX_RADIUS {
+            return Err(Error::InvalidParameter(format!(
+                "motion-edge window half-size {} px is above {MAX_RADIUS} px",
+                self.radius
+            )));
+        }
+        if self.sigma_colour < MIN_SIGMA_COLOUR {
+            return Err(Error::InvalidParameter(format!(
+                "motion-edge colour scale σ_c = {} is below {MIN_SIGMA_COLOUR}",
+                self.sigma_colour
             )));
         }
         if self.band > self.radius {
@@ -270,7 +293,7 @@ pub fn halve_frame(frame: &Frame, levels: usize) -> Frame {
 }
 
 /// exp(−ΔE² / 2σ_c²) by table: the exponent in steps of 1/[`ColourWeights::STEPS_PER_UNIT`]
-/// (weights within 0.1 % of the exact ones), and nothing beyond [`ColourWeights::CUT`]: votes
+/// (weights within 0.2 % of the exact ones), and nothing beyond [`ColourWeights::CUT`]: votes
 /// whose colour weight is below e^−9 (ΔE > 3√2 σ_c) cannot move a median that nearer colours
 /// decide, and leaving them out halves the work.
 struct ColourWeights {
@@ -303,8 +326,13 @@ impl ColourWeights {
 /// The weighted median of (value, weight) pairs: the smallest value at which the weight up to
 /// and including it reaches half the total (weights ≥ 0, total > 0). By quickselect, expected
 /// linear time; the list is reordered. `crate::numeric::weighted_median`, which sorts, is the
-/// plain reference it is tested against (they differ only where the weight below a value is
-/// exactly half, where that one returns the mean of two values).
+/// plain reference it is tested against (they differ where the weight below a value is exactly
+/// half, where that one returns the mean of two values, and by float32 against float64
+/// rounding). It exists beside that one for speed: it runs twice for every pixel near a motion
+/// edge, on up to 225 votes. Its sums are float32 in the order the selection leaves the votes,
+/// so its last bits depend on the standard library's selection algorithm: the same on every
+/// platform of one toolchain (tests/parity.rs checks native against wasm), not across
+/// toolchains.
 fn weighted_median_f32(votes: &mut [(f32, f32)]) -> f32 {
     let mut half = 0.5 * votes.iter().map(|v| v.1).sum::<f32>();
     let mut slice = votes;
@@ -410,6 +438,30 @@ mod tests {
     }
 
     #[test]
+    fn the_fast_weighted_median_handles_zero_weights_and_equal_values() {
+        // Zero weights never decide; a single voter with weight decides alone.
+        let mut votes = vec![(5.0, 0.0), (1.0, 0.0), (3.0, 2.0), (-4.0, 0.0)];
+        assert_eq!(weighted_median_f32(&mut votes), 3.0);
+        let mut equal = vec![(2.5, 0.3); 40];
+        assert_eq!(weighted_median_f32(&mut equal), 2.5);
+        // A heavy vote outweighs many light ones on the other side.
+        let mut heavy: Vec<(f32, f32)> = (0..30).map(|i| (i as f32, 0.01)).collect();
+        heavy.push((-1.0, 1.0));
+        assert_eq!(weighted_median_f32(&mut heavy), -1.0);
+    }
+
+    #[test]
+    fn a_horizontal_boundary_gives_a_band_across_the_columns_up_to_the_borders() {
+        let flow = Grid::from_fn(6, 20, |_, y| if y < 10 { [0.0, 0.0] } else { [0.0, -2.0] });
+        let band = boundary_band(&flow, &EdgeParams::default());
+        for y in 0..20 {
+            for x in 0..6 {
+                assert_eq!(*band.get(x, y), (6..=13).contains(&y), "({x}, {y})");
+            }
+        }
+    }
+
+    #[test]
     fn flow_without_jumps_is_left_alone() {
         let (frame, _, _) = two_regions();
         // A smooth field: neighbours differ by 0.05 px.
@@ -457,6 +509,14 @@ mod tests {
             },
             EdgeParams {
                 band: 9,
+                ..EdgeParams::default()
+            },
+            EdgeParams {
+                radius: MAX_RADIUS + 1,
+                ..EdgeParams::default()
+            },
+            EdgeParams {
+                sigma_colour: 1e-4,
                 ..EdgeParams::default()
             },
         ] {

@@ -75,8 +75,8 @@ pub fn resize_flow(flow: &FlowField, width: usize, height: usize) -> FlowField {
     })
 }
 
-/// Everything [`compute_flow`] needs: the DIS parameters of a preset and the forward–backward
-/// tolerance.
+/// Everything [`compute_flow`] needs: the DIS parameters of a preset, the motion-edge
+/// sharpening's settings and the forward–backward tolerance.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct FlowParams {
     pub dis: DisParams,
