@@ -179,10 +179,7 @@ pub fn boundary_recall(
                     .is_some_and(|&m| m != l)
             })
     });
-    let t = tolerance as isize;
-    let near_boundary = |x: isize, y: isize| {
-        (-t..=t).any(|dy| (-t..=t).any(|dx| boundary.get_checked(x + dx, y + dy) == Some(&true)))
-    };
+    let near_boundary = boundary.dilated(tolerance);
     let z_at = |x: isize, y: isize| {
         depth
             .get_checked(x, y)
@@ -207,7 +204,7 @@ pub fn boundary_recall(
                 let after = z_at(x + 2 * dx, y + 2 * dy).map(|za| 2.0 / zq - 1.0 / za);
                 if misses(before, zq) && misses(after, zp) {
                     total += 1;
-                    found += near_boundary(x, y) as usize;
+                    found += usize::from(*near_boundary.get(x as usize, y as usize));
                 }
             }
         }

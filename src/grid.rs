@@ -146,6 +146,49 @@ impl<T> Grid<T> {
     }
 }
 
+impl Grid<bool> {
+    /// True where a set cell lies within `r` cells in Chebyshev distance (a (2r + 1)² square
+    /// around each set cell), by two 1-D passes: rows, then columns.
+    pub fn dilated(&self, r: usize) -> Grid<bool> {
+        let (w, h) = self.size();
+        let mut rows = Grid::filled(w, h, false);
+        for y in 0..h {
+            grow_line(
+                |x| *self.get(x, y),
+                r,
+                |x, set| *rows.get_mut(x, y) = set,
+                w,
+            );
+        }
+        let mut out = Grid::filled(w, h, false);
+        for x in 0..w {
+            grow_line(|y| *rows.get(x, y), r, |y, set| *out.get_mut(x, y) = set, h);
+        }
+        out
+    }
+}
+
+/// One line of [`Grid::dilated`]: `write(i, set)` for i in 0..len, set when `read` is true
+/// within `r` of i (the distance to the nearest set cell on the left, then on the right).
+fn grow_line(
+    read: impl Fn(usize) -> bool,
+    r: usize,
+    mut write: impl FnMut(usize, bool),
+    len: usize,
+) {
+    let mut near = vec![false; len];
+    let mut since = usize::MAX;
+    for (i, n) in near.iter_mut().enumerate() {
+        since = if read(i) { 0 } else { since.saturating_add(1) };
+        *n = since <= r;
+    }
+    since = usize::MAX;
+    for (i, n) in near.iter_mut().enumerate().rev() {
+        since = if read(i) { 0 } else { since.saturating_add(1) };
+        write(i, *n || since <= r);
+    }
+}
+
 impl Grid<f32> {
     /// Bilinear sample at real coordinates (x, y) with pixel centres at integers;
     /// coordinates are clamped to the grid (border replication).
@@ -187,6 +230,26 @@ mod tests {
         assert_eq!(g.row(1), &[10, 11, 12]);
         assert_eq!(g.get_checked(-1, 0), None);
         assert_eq!(g.get_checked(3, 0), None);
+    }
+
+    #[test]
+    fn dilation_is_the_chebyshev_square_up_to_the_borders() {
+        let mut mask = Grid::filled(7, 5, false);
+        *mask.get_mut(1, 1) = true;
+        *mask.get_mut(6, 4) = true;
+        let near = |x: usize, y: usize, r: usize| {
+            [(1usize, 1usize), (6, 4)]
+                .iter()
+                .any(|&(a, b)| x.abs_diff(a) <= r && y.abs_diff(b) <= r)
+        };
+        for r in 0..4 {
+            let grown = mask.dilated(r);
+            for y in 0..5 {
+                for x in 0..7 {
+                    assert_eq!(*grown.get(x, y), near(x, y, r), "r {r} ({x}, {y})");
+                }
+            }
+        }
     }
 
     #[test]

@@ -157,39 +157,7 @@ pub fn boundary_band(flow: &FlowField, params: &EdgeParams) -> Grid<bool> {
             }
         }
     }
-    dilate(&edge, params.band)
-}
-
-/// `mask` grown by `r` pixels in Chebyshev distance (a (2r + 1)² square), rows then columns.
-fn dilate(mask: &Grid<bool>, r: usize) -> Grid<bool> {
-    let (w, h) = mask.size();
-    let grow = |read: &dyn Fn(usize) -> bool, len: usize| -> Vec<bool> {
-        // Distance to the nearest set cell on the left (then right), saturating.
-        let mut out = vec![false; len];
-        let mut since = usize::MAX;
-        for (i, o) in out.iter_mut().enumerate() {
-            since = if read(i) { 0 } else { since.saturating_add(1) };
-            *o = since <= r;
-        }
-        since = usize::MAX;
-        for (i, o) in out.iter_mut().enumerate().rev() {
-            since = if read(i) { 0 } else { since.saturating_add(1) };
-            *o |= since <= r;
-        }
-        out
-    };
-    let mut rows = Grid::filled(w, h, false);
-    for y in 0..h {
-        let grown = grow(&|x| *mask.get(x, y), w);
-        rows.data_mut()[y * w..(y + 1) * w].copy_from_slice(&grown);
-    }
-    let mut out = Grid::filled(w, h, false);
-    for x in 0..w {
-        for (y, set) in grow(&|y| *rows.get(x, y), h).into_iter().enumerate() {
-            *out.get_mut(x, y) = set;
-        }
-    }
-    out
+    edge.dilated(params.band)
 }
 
 /// `flow` with every pixel near a motion boundary ([`boundary_band`]) replaced, per component,

@@ -190,11 +190,15 @@ pub fn compute_flow(
     let mut run = |from: &[pyramid::Level], to: &[pyramid::Level], colour: &Frame, offset: f32| {
         let (u, v) = dis::dis_flow(from, to, &params.dis, &mut |f| progress(offset + 0.5 * f));
         let data = u.iter().zip(&v).map(|(&u, &v)| [u, v]).collect();
-        let level = edges::sharpen_motion_edges(
-            &Grid::from_vec(lw, lh, data)?,
-            &edges::halve_frame(colour, finest),
-            &params.edges,
-        )?;
+        let halved;
+        let colour = if finest == 0 {
+            colour
+        } else {
+            halved = edges::halve_frame(colour, finest);
+            &halved
+        };
+        let level =
+            edges::sharpen_motion_edges(&Grid::from_vec(lw, lh, data)?, colour, &params.edges)?;
         if finest == 0 {
             return Ok(level);
         }
