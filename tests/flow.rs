@@ -345,6 +345,16 @@ fn every_preset_reports_progress_from_0_to_1() {
         assert!(seen.len() > 2, "{}: {seen:?}", preset.name());
         assert_eq!((seen.first(), seen.last()), (Some(&0.0), Some(&1.0)));
         assert!(seen.windows(2).all(|p| p[0] <= p[1]), "{seen:?}");
+        // The forward direction ends at one half; its motion-edge sharpening is reported as a
+        // step of its own after DIS (a tenth of the whole: DIS takes 0.8 of each direction).
+        let half = seen.iter().position(|&f| f == 0.5);
+        let before = half.and_then(|i| i.checked_sub(1)).map(|i| seen[i]);
+        let step = before.map(|f| 0.5 - f);
+        assert!(
+            step.is_some_and(|s| (s - 0.1).abs() < 1e-6),
+            "{}: {seen:?}",
+            preset.name()
+        );
     }
 }
 

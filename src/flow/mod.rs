@@ -159,6 +159,10 @@ pub struct FlowPair {
     pub reliable: Grid<bool>,
 }
 
+/// The share of one direction's flow time that DIS takes; the motion-edge sharpening takes the
+/// rest (measured at preset high, full resolution: about 460 ms against 100 ms per direction).
+const DIS_SHARE: f32 = 0.8;
+
 /// Dense flow frame 1 → 2 and 2 → 1 with the forward–backward mask. `progress` gets the share of
 /// the work done, in [0, 1].
 ///
@@ -187,8 +191,11 @@ pub fn compute_flow(
     // DIS on the finest level it computes, motion edges sharpened there (with the colour frame
     // at that level, in that level's pixels), then brought to full resolution.
     let (lw, lh) = pyramid::level_size(w, h, finest);
+    // Each direction is half the work: DIS its first `DIS_SHARE`, the sharpening the rest.
     let mut run = |from: &[pyramid::Level], to: &[pyramid::Level], colour: &Frame, offset: f32| {
-        let (u, v) = dis::dis_flow(from, to, &params.dis, &mut |f| progress(offset + 0.5 * f));
+        let (u, v) = dis::dis_flow(from, to, &params.dis, &mut |f| {
+            progress(offset + 0.5 * DIS_SHARE * f)
+        });
         let data = u.iter().zip(&v).map(|(&u, &v)| [u, v]).collect();
         let halved;
         let colour = if finest == 0 {
@@ -199,6 +206,7 @@ pub fn compute_flow(
         };
         let level =
             edges::sharpen_motion_edges(&Grid::from_vec(lw, lh, data)?, colour, &params.edges)?;
+        progress(offset + 0.5);
         if finest == 0 {
             return Ok(level);
         }
