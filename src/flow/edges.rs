@@ -196,8 +196,8 @@ pub fn sharpen_motion_edges(
         .collect();
     let (lab, in_band, vectors) = (lab.data(), band.data(), flow.data());
     let mut out = flow.clone();
-    let mut votes_u: Vec<(f32, f32)> = Vec::with_capacity(window.len());
-    let mut votes_v: Vec<(f32, f32)> = Vec::with_capacity(window.len());
+    let mut votes_u: Vec<(f32, u32)> = Vec::with_capacity(window.len());
+    let mut votes_v: Vec<(f32, u32)> = Vec::with_capacity(window.len());
     for (at, _) in in_band.iter().enumerate().filter(|(_, b)| **b) {
         let (x, y) = ((at % w) as isize, (at / w) as isize);
         let c = lab[at];
@@ -221,11 +221,12 @@ pub fn sharpen_motion_edges(
             } else {
                 spatial * colour
             };
+            let weight = fixed_point_weight(weight);
             let f = vectors[q_at];
             votes_u.push((f[0], weight));
             votes_v.push((f[1], weight));
         }
-        // The pixel itself always votes (weight band_vote > 0), so neither list is empty.
+        // The pixel itself always votes, so neither list is empty.
         out.data_mut()[at] = [
             weighted_median_f32(&mut votes_u),
             weighted_median_f32(&mut votes_v),
@@ -291,26 +292,43 @@ impl ColourWeights {
     }
 }
 
+/// A vote's weight in (0, 1] as an integer in units of 2⁻²⁴, so that the weighted median's sums
+/// are exact: the median then does not depend on the order in which the selection visits the
+/// votes (float sums do, in their last bits, and that order is the standard library's choice).
+/// Weights below 2⁻²⁴ become 0 and do not vote.
+#[inline]
+fn fixed_point_weight(weight: f32) -> u32 {
+    (weight * FIXED_POINT_ONE) as u32
+}
+
+/// 1.0 in [`fixed_point_weight`]'s units.
+const FIXED_POINT_ONE: f32 = 16_777_216.0;
+
 /// The weighted median of (value, weight) pairs: the smallest value at which the weight up to
-/// and including it reaches half the total (weights ≥ 0, total > 0). By quickselect, expected
-/// linear time; the list is reordered. `crate::numeric::weighted_median`, which sorts, is the
-/// plain reference it is tested against (they differ where the weight below a value is exactly
-/// half, where that one returns the mean of two values, and by float32 against float64
-/// rounding). It exists beside that one for speed: it runs twice for every pixel near a motion
-/// edge, on up to 225 votes. Its sums are float32 in the order the selection leaves the votes,
-/// so its last bits depend on the standard library's selection algorithm: the same on every
-/// platform of one toolchain (tests/parity.rs checks native against wasm), not across
-/// toolchains.
-fn weighted_median_f32(votes: &mut [(f32, f32)]) -> f32 {
-    let mut half = 0.5 * votes.iter().map(|v| v.1).sum::<f32>();
+/// and including it reaches half the total; with a total of 0, the smallest value. By
+/// quickselect, expected linear time; the list is reordered. The weights are integers
+/// ([`fixed_point_weight`]) and their sums exact, so the result is the same whatever order the
+/// votes come in or the selection leaves them in. `crate::numeric::weighted_median`, which
+/// sorts, is the plain reference it is tested against (they differ only where the weight below
+/// a value is exactly half, where that one returns the mean of two values). It exists beside
+/// that one for speed: it runs twice for every pixel near a motion edge, on up to 225 votes.
+/// `votes` must not be empty.
+fn weighted_median_f32(votes: &mut [(f32, u32)]) -> f32 {
+    let total: u64 = votes.iter().map(|v| u64::from(v.1)).sum();
+    if total == 0 {
+        return votes.iter().map(|v| v.0).fold(f32::INFINITY, f32::min);
+    }
+    // `rest` is twice the weight still to be reached: the median is the first value at which
+    // twice the weight up to it reaches the total.
+    let mut rest = total;
     let mut slice = votes;
     loop {
         if slice.len() <= 16 {
             slice.sort_unstable_by(|a, b| a.0.total_cmp(&b.0));
-            let mut below = 0.0;
+            let mut below = 0u64;
             for &(value, weight) in slice.iter() {
-                below += weight;
-                if below >= half {
+                below += u64::from(weight);
+                if 2 * below >= rest {
                     return value;
                 }
             }
@@ -318,13 +336,14 @@ fn weighted_median_f32(votes: &mut [(f32, f32)]) -> f32 {
         }
         let mid = slice.len() / 2;
         let (left, pivot, _) = slice.select_nth_unstable_by(mid, |a, b| a.0.total_cmp(&b.0));
-        let (below, pivot) = (left.iter().map(|v| v.1).sum::<f32>(), *pivot);
-        if below >= half {
+        let below: u64 = left.iter().map(|v| u64::from(v.1)).sum();
+        let (value, weight) = (pivot.0, u64::from(pivot.1));
+        if 2 * below >= rest {
             slice = &mut slice[..mid];
-        } else if below + pivot.1 >= half {
-            return pivot.0;
+        } else if 2 * (below + weight) >= rest {
+            return value;
         } else {
-            half -= below + pivot.1;
+            rest -= 2 * (below + weight);
             slice = &mut slice[mid + 1..];
         }
     }
@@ -380,15 +399,16 @@ mod tests {
         let mut rng = crate::rng::Rng::new(5);
         for n in [1, 2, 3, 17, 60, 225] {
             for _ in 0..50 {
-                let votes: Vec<(f32, f32)> = (0..n)
+                let votes: Vec<(f32, u32)> = (0..n)
                     .map(|_| {
                         (
                             (rng.uniform() * 10.0).round() as f32,
-                            rng.uniform() as f32 + 1e-3,
+                            fixed_point_weight(rng.uniform() as f32 + 1e-3),
                         )
                     })
                     .collect();
                 let mut fast = votes.clone();
+                // Integer weights are exact in f64, so the reference's sums are exact too.
                 let mut plain: Vec<(f64, f64)> = votes
                     .iter()
                     .map(|&(v, w)| (f64::from(w), f64::from(v)))
@@ -396,11 +416,8 @@ mod tests {
                 let got = weighted_median_f32(&mut fast);
                 let want = crate::numeric::weighted_median(&mut plain).unwrap();
                 // The reference takes the mean of two values where the weight below is exactly
-                // half; with random weights that does not happen, up to rounding.
-                assert!(
-                    (f64::from(got) - want).abs() < 1e-6,
-                    "{votes:?}: {got} against {want}"
-                );
+                // half; with random weights that does not happen.
+                assert_eq!(f64::from(got), want, "{votes:?}");
             }
         }
     }
@@ -408,14 +425,57 @@ mod tests {
     #[test]
     fn the_fast_weighted_median_handles_zero_weights_and_equal_values() {
         // Zero weights never decide; a single voter with weight decides alone.
-        let mut votes = vec![(5.0, 0.0), (1.0, 0.0), (3.0, 2.0), (-4.0, 0.0)];
+        let mut votes = vec![(5.0, 0), (1.0, 0), (3.0, 2), (-4.0, 0)];
         assert_eq!(weighted_median_f32(&mut votes), 3.0);
-        let mut equal = vec![(2.5, 0.3); 40];
+        let mut equal = vec![(2.5, 3); 40];
         assert_eq!(weighted_median_f32(&mut equal), 2.5);
         // A heavy vote outweighs many light ones on the other side.
-        let mut heavy: Vec<(f32, f32)> = (0..30).map(|i| (i as f32, 0.01)).collect();
-        heavy.push((-1.0, 1.0));
+        let mut heavy: Vec<(f32, u32)> = (0..30).map(|i| (i as f32, 1)).collect();
+        heavy.push((-1.0, 100));
         assert_eq!(weighted_median_f32(&mut heavy), -1.0);
+        // Without any weight, the smallest value.
+        let mut none = vec![(4.0, 0), (-2.0, 0), (7.0, 0)];
+        assert_eq!(weighted_median_f32(&mut none), -2.0);
+        // Exactly half below: the value at which half is reached, not the next one.
+        let mut split = vec![(1.0, 5), (9.0, 5)];
+        assert_eq!(weighted_median_f32(&mut split), 1.0);
+    }
+
+    #[test]
+    fn the_fast_weighted_median_does_not_depend_on_the_order_of_the_votes() {
+        // Windows as the sharpening makes them: 15 x 15 spatial weights (sigma 7 px), two colours
+        // and two flow values split by a line through the window, band votes x 0.05. Such
+        // windows are often symmetric, so that the weight on one side is exactly half the total
+        // in exact arithmetic, and float sums in another order tip the median to the other side.
+        let mut rng = crate::rng::Rng::new(11);
+        let spatial = |dx: i32, dy: i32| crate::numeric::exp(-f64::from(dx * dx + dy * dy) / 98.0);
+        for _ in 0..5_000 {
+            let (a, b) = (
+                (rng.uniform() * 4.0) as i32 - 2,
+                (rng.uniform() * 3.0) as i32 - 1,
+            );
+            let colour = if rng.uniform() < 0.5 { 1.0 } else { 0.3 };
+            let band_width = (rng.uniform() * 4.0) as i32;
+            let votes: Vec<(f32, u32)> = (-7..=7)
+                .flat_map(|dy| (-7..=7).map(move |dx| (dx, dy)))
+                .map(|(dx, dy)| {
+                    let side = a * dx + b * dy;
+                    let value = if side < 0 { 1.5 } else { 4.0 };
+                    let mut weight = spatial(dx, dy) * if side < 0 { colour } else { 1.0 };
+                    if side.abs() <= band_width {
+                        weight *= 0.05;
+                    }
+                    (value, fixed_point_weight(weight as f32))
+                })
+                .collect();
+            let mut forward = votes.clone();
+            let mut reversed: Vec<(f32, u32)> = votes.iter().rev().copied().collect();
+            let mut rotated = votes.clone();
+            rotated.rotate_left(votes.len() / 3);
+            let want = weighted_median_f32(&mut forward);
+            assert_eq!(weighted_median_f32(&mut reversed).to_bits(), want.to_bits());
+            assert_eq!(weighted_median_f32(&mut rotated).to_bits(), want.to_bits());
+        }
     }
 
     #[test]
