@@ -57,8 +57,12 @@ pub struct InitParams {
     /// Cost of each hypothesis in use (px of mean transfer error, summed over superpixels).
     pub label_cost_px: f64,
     /// A region of one hypothesis joins a touching region's hypothesis when that explains it at
-    /// most this much worse on average (px per superpixel): large regions whose motions differ
-    /// only by the flow's systematic errors are one motion (see `merge_similar`).
+    /// most this much worse on average (px per superpixel, beyond the fitting's noise deadband;
+    /// see `merge_similar`). 0: only where the other motion explains it as well. With the
+    /// sharpened flow the merges that a tolerance adds are mostly a walker joining the
+    /// ego-motion or another walker's motion (crowd 0.104 -> 0.076 over five seeds at 0, the
+    /// flag, which gains from joining its bands, +0.001); at 0.6 px, the earlier value, they
+    /// placed the crowd's brick-box walker at 0.4 of its depth (docs/RESULTS.md, stop 43).
     pub merge_px: f64,
     /// ... and only where, seen under that hypothesis, its planes meet those of the region it
     /// joins: the median log-depth gap across their boundary below this (see `Surfaces::gap`).
@@ -88,7 +92,7 @@ impl Default for InitParams {
             explain_px: 0.5,
             smoothness_px: 0.2,
             label_cost_px: 12.0,
-            merge_px: 0.6,
+            merge_px: 0.0,
             merge_gap: 0.15,
             ego_preference_px: 0.3,
             min_parallax_px: 0.05,
