@@ -60,9 +60,9 @@ pub struct InitParams {
     /// most this much worse on average (px per superpixel, beyond the fitting's noise deadband;
     /// see `merge_similar`). 0: only where the other motion explains it as well. With the
     /// sharpened flow the merges that a tolerance adds are mostly a walker joining the
-    /// ego-motion or another walker's motion (crowd 0.104 -> 0.076 over five seeds at 0, the
-    /// flag, which gains from joining its bands, +0.001); at 0.6 px, the earlier value, they
-    /// placed the crowd's brick-box walker at 0.4 of its depth (docs/RESULTS.md, stop 43).
+    /// ego-motion or another walker's motion: from 0.6 px (the earlier value) to 0 the crowd's
+    /// mean over five seeds falls 0.104 -> 0.076 and the flag's rises by 0.001; 0.1 gives the
+    /// same results as 0 (docs/RESULTS.md, stop 43).
     pub merge_px: f64,
     /// ... and only where, seen under that hypothesis, its planes meet those of the region it
     /// joins: the median log-depth gap across their boundary below this (see `Surfaces::gap`).
