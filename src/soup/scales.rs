@@ -167,10 +167,21 @@ pub struct ScaleParams {
     /// the road's cars (0.7–1.1).
     pub sunk_gap: f64,
     /// The static prior: each segment on the ego-motion is tied to the static world's scale
-    /// as if by this many contacts per piece (each at most σ). Weak: 0.05 gives a segment of
-    /// 20 pieces the pull of one full contact, so contacts overrule it wherever they agree
-    /// (0.05–0.3 measured within ±0.01 on most scenes; 0.3 raised the crowd by 0.03).
+    /// as if by this many contacts per piece (each at most σ), up to `static_max`. Weak: 0.05
+    /// gives a segment of 20 pieces the pull of one full contact, so contacts overrule it
+    /// wherever they agree (0.05–0.3 measured within ±0.01 on most scenes; 0.3 raised the
+    /// crowd by 0.03).
     pub static_weight: f64,
+    /// The static prior's pull on one segment at most, in contacts: 1.5, that of 30 pieces;
+    /// the floor (a segment mostly on the static world's ground) is not capped. A large
+    /// segment on the ego-motion apart from the static world is as likely a mover that the
+    /// ego-motion explains at a wrong depth (the crowd's brick-box walker: 56–79 pieces at 0.4
+    /// of its depth) as a static thing, and the pull of 4 contacts held such a walker against
+    /// its body resting on the floor (crowd 0.076 over five seeds, 0.064 at most 1.5; 1.2 and
+    /// 1.8 within 0.001 of it). The floor is static whatever its size: capped, the crowd's
+    /// floor, apart from the wall, followed its walkers (0.08 -> 0.20 with the page's
+    /// settings at 1400 superpixels). Small fragments keep the full 0.05 per piece.
+    pub static_max: f64,
     /// A segment on the ego-motion is measured static world, free of the figure prior, when at
     /// least this share of its pieces have the parallax of `world_parallax`. Half: a fragment
     /// of mostly poorly measured pieces may be a mover that the ego-motion explains by accident
@@ -229,6 +240,7 @@ impl Default for ScaleParams {
             world_gap: 0.2,
             sunk_gap: 0.2,
             static_weight: 0.05,
+            static_max: 1.5,
             measured_share: 0.5,
             ground_weight: 1.0,
             ground_share: 0.03,
@@ -692,6 +704,10 @@ struct Segments {
     measured: Vec<bool>,
     /// The static world's segment: the largest on the ego-motion.
     world: Option<usize>,
+    /// Per segment, whether it is floor: on the ego-motion, with at least half of its pieces
+    /// within σ of the static world's ground at equal scale (see `below`). The static prior
+    /// holds such a segment with its full weight (`ScaleParams::static_max` does not cap it).
+    grounded: Vec<bool>,
     /// Per piece, how far it lies under the static world's ground at equal scales
     /// ([`ground::depth_below_ground`]); `None` for pieces above the horizon, and for every
     /// piece when no ground is in view.
@@ -840,6 +856,13 @@ impl Segments {
             .map(|g| ego[g] && well_measured[g] as f64 >= params.measured_share * sizes[g] as f64)
             .collect();
         let world = static_world(&sizes, &ego);
+        let mut on_ground = vec![0usize; sizes.len()];
+        for (&g, b) in segment.iter().zip(&below) {
+            on_ground[g] += usize::from(b.is_some_and(|b| b.abs() < params.sigma));
+        }
+        let grounded = (0..sizes.len())
+            .map(|g| ego[g] && 2 * on_ground[g] >= sizes[g])
+            .collect();
         Segments {
             segment,
             sizes,
@@ -847,6 +870,7 @@ impl Segments {
             ego,
             measured,
             world,
+            grounded,
             below,
             resting,
             floor,
@@ -1302,7 +1326,12 @@ fn segment_pair_terms(problem: &Problem, segments: &Segments, params: &ScalePara
     }
     add_ground_prior(&mut pairs, segments, params.ground_weight * problem.sigma);
     add_rest_prior(&mut pairs, segments, params.rest_weight);
-    add_static_prior(&mut pairs, segments, params.static_weight);
+    add_static_prior(
+        &mut pairs,
+        segments,
+        params.static_weight,
+        params.static_max,
+    );
     // Sorted terms reach `minimise_contacts` as sorted runs, which its sort merges.
     for pair in pairs.values_mut() {
         pair.terms.sort_by(|a, b| a.1.total_cmp(&b.1));
@@ -1383,15 +1412,24 @@ fn add_rest_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64) {
 }
 
 /// The static prior: every segment on the ego-motion but the largest (the static world) is
-/// tied to that one as if by `weight` contacts per piece at equal scale. The ego-motion
-/// explains such a segment's flow at the world's scale, so it is static unless its contacts
-/// say otherwise (a walker moving parallel to the camera's translation).
-fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64) {
+/// tied to that one as if by `weight` contacts per piece at equal scale, by at most `max`
+/// contacts unless it is floor (`Segments::grounded`). The ego-motion explains such a
+/// segment's flow at the world's scale, so it is static unless its contacts say otherwise (a
+/// walker moving parallel to the camera's translation); the floor does not move.
+fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64, max: f64) {
     let Segments {
         sizes, centre, ego, ..
     } = segments;
     let Some(world) = segments.world.filter(|_| weight > 0.0) else {
         return;
+    };
+    let pull = |g: usize| {
+        let full = weight * sizes[g] as f64;
+        if segments.grounded[g] {
+            full
+        } else {
+            full.min(max)
+        }
     };
     for g in (0..sizes.len()).filter(|&g| ego[g] && g != world) {
         // s_a − s_b = d + centre_a − centre_b with d = u_a − u_b.
@@ -1400,7 +1438,7 @@ fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64) {
             .entry((a, b))
             .or_default()
             .terms
-            .push((weight * sizes[g] as f64, centre[a] - centre[b]));
+            .push((pull(g), centre[a] - centre[b]));
     }
 }
 
@@ -2042,6 +2080,7 @@ mod tests {
             ego: ego.to_vec(),
             measured: ego.to_vec(),
             world,
+            grounded: vec![false; centre.len()],
             below: vec![None; segment.len()],
             resting: vec![Vec::new(); segment.len()],
             floor: false,
@@ -2405,6 +2444,45 @@ mod tests {
             let v = placement(weight, on_ego);
             assert!((v - 1.0).abs() < 1e-9, "{weight} {on_ego}: {v}");
         }
+    }
+
+    #[test]
+    fn the_static_prior_on_a_large_segment_pulls_no_more_than_static_max_contacts() {
+        // The world (segment 0, 200 pieces) and a segment of 100 pieces on the ego-motion
+        // (segment 1) whose one contact, between pieces 200 and 0, holds it 1 (log-scale)
+        // behind with the weight of two contacts. At 0.05 per piece its static prior would
+        // pull like 5 contacts and tie it to the world; at most 1.5 (the default), its contact
+        // places it. Below the cap the prior pulls per piece (10 pieces: 0.5, overruled too);
+        // a segment of floor (`grounded`) is held with the full weight.
+        let place = |pieces: usize, params: &ScaleParams, grounded: bool| {
+            let mut touching = vec![Vec::new(); 200 + pieces];
+            touching[0].push(0);
+            touching[200].push(0);
+            let problem = Problem {
+                links: vec![link(200, 0, 2.0, -1.0)],
+                touching,
+                sigma: 0.1,
+            };
+            let segment: Vec<usize> = (0..200 + pieces).map(|i| usize::from(i >= 200)).collect();
+            let mut segments = segments_of(&segment, &[0.0, 0.0], &[true, true]);
+            segments.grounded[1] = grounded;
+            let u = solve_segments(&problem, &segments, params, None).0;
+            u[1] - u[0]
+        };
+        let defaults = ScaleParams::default();
+        for pieces in [10, 100] {
+            let v = place(pieces, &defaults, false);
+            assert!((v - 1.0).abs() < 1e-9, "{pieces} pieces: {v}");
+        }
+        let uncapped = ScaleParams {
+            static_max: f64::INFINITY,
+            ..defaults
+        };
+        let tied = place(100, &uncapped, false);
+        assert!(tied.abs() < 1e-9, "{tied}");
+        // The floor is not capped.
+        let floor = place(100, &defaults, true);
+        assert!(floor.abs() < 1e-9, "{floor}");
     }
 
     #[test]
