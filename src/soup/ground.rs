@@ -59,7 +59,7 @@ pub const MIN_RESTING_PIXELS: usize = 3;
 /// segment, so their unit-scale planes share a scale), those with a ground-like plane vote for
 /// each other's planes by pixels; the plane with the most pixels within 5 % in depth
 /// (`ON_PLANE_LOG_GAP`) is refitted to its voters' surface points twice. A plane with much of
-/// the candidates' surface under it ([`MAX_UNDER_SHARE`]) is a raised surface, not the floor:
+/// the candidates' surface under it (`MAX_UNDER_SHARE`) is a raised surface, not the floor:
 /// it and its voters drop out and the next plane by votes is tried. `None` when the ground's
 /// pieces cover less than `min_share` of the image (no floor worth trusting is in view).
 ///
