@@ -62,7 +62,9 @@
 //!    edge of the view): below a standing thing the floor runs towards the camera, in front of
 //!    it. A weak *static prior* (`static_weight`) ties every
 //!    segment on the ego-motion to the static world's scale instead: the ego-motion explains
-//!    its flow at exactly that scale. A *ground prior* (`ground_weight`) charges every piece
+//!    its flow at exactly that scale. Its pull on one segment is capped (`static_max`), the
+//!    floor's excepted: a large segment apart from the world may be a mover the ego-motion
+//!    explains at a wrong depth, which its contacts must be able to place. A *ground prior* (`ground_weight`) charges every piece
 //!    outside the static world one broken contact for lying more than σ under its ground. A
 //!    *rest prior* (`rest_weight`) ties every mover whose bottom pixels sit on the ground to
 //!    it, in front as behind: a standing thing touches what it stands on, and its contacts with
