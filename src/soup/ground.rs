@@ -134,19 +134,11 @@ fn under_share(
     candidates: &[bool],
     m: &Vector3<f64>,
 ) -> f64 {
-    let width = superpixels.labels.width();
     let (mut under, mut met) = (0usize, 0usize);
-    for (piece, segment) in (soup.pieces.iter().zip(&superpixels.segments))
-        .zip(candidates)
-        .filter_map(|(pair, &c)| c.then_some(pair))
-    {
-        for &p in segment.pixels.iter().step_by(PIXEL_STRIDE) {
-            let r = pixel_ray(intrinsics, width, p);
-            let (g, own) = (m.dot(&r), piece.m.dot(&r));
-            if g > 0.0 && own > 0.0 {
-                met += 1;
-                under += usize::from(ln(g) - ln(own) > UNDER_LOG_GAP);
-            }
+    for i in (0..soup.pieces.len()).filter(|&i| candidates[i]) {
+        for gap in gaps_under(soup, superpixels, intrinsics, m, i) {
+            met += 1;
+            under += usize::from(gap > UNDER_LOG_GAP);
         }
     }
     if met == 0 {
@@ -224,24 +216,36 @@ pub fn depth_below_ground(
     ground: &Vector3<f64>,
     i: usize,
 ) -> Option<f64> {
-    let width = superpixels.labels.width();
-    let m = soup.pieces[i].m;
-    let mut below: Vec<f64> = superpixels.segments[i]
-        .pixels
-        .iter()
-        .step_by(PIXEL_STRIDE)
-        .filter_map(|&p| {
-            let r = pixel_ray(intrinsics, width, p);
-            let (g, own) = (ground.dot(&r), m.dot(&r));
-            (g > 0.0 && own > 0.0).then(|| ln(g) - ln(own))
-        })
-        .collect();
+    let mut below: Vec<f64> = gaps_under(soup, superpixels, intrinsics, ground, i).collect();
     if below.is_empty() {
         return None;
     }
     below.sort_by(f64::total_cmp);
     let k = ((below.len() - 1) as f64 * BELOW_QUANTILE).round() as usize;
     Some(below[k])
+}
+
+/// For every [`PIXEL_STRIDE`]-th pixel of piece `i` whose ray meets both its unit-scale plane
+/// and `ground` in front of the camera, ln z̄_i − ln z̄_G: how far the piece lies under the
+/// ground there at equal scale (positive: under it).
+fn gaps_under<'a>(
+    soup: &'a Soup,
+    superpixels: &'a Superpixels,
+    intrinsics: &'a Intrinsics,
+    ground: &'a Vector3<f64>,
+    i: usize,
+) -> impl Iterator<Item = f64> + 'a {
+    let width = superpixels.labels.width();
+    let m = soup.pieces[i].m;
+    superpixels.segments[i]
+        .pixels
+        .iter()
+        .step_by(PIXEL_STRIDE)
+        .filter_map(move |&p| {
+            let r = pixel_ray(intrinsics, width, p);
+            let (g, own) = (ground.dot(&r), m.dot(&r));
+            (g > 0.0 && own > 0.0).then(|| ln(g) - ln(own))
+        })
 }
 
 /// Where piece `i` rests on the ground: for each of its pixels p whose pixel below (p + width,
