@@ -1,6 +1,7 @@
 //! Accuracy metrics against ground truth, as docs/ARCHITECTURE.md (Measuring) defines them,
 //! where the evaluation data is read from ([`eval_case_dir`]), and the truth test's oracle of
-//! every piece's true state from exact scene flow ([`true_states`]).
+//! every piece's true state from exact scene flow ([`true_states`]), and the camera's own
+//! ([`true_camera_motion`]) to score the estimated ego-motion ([`motion_error`]).
 //!
 //! Depth is known only up to one global scale, so every depth metric first aligns the estimate:
 //! - MRE and δ<1.25 use s = median(z_gt / z) over pixels valid in both maps;
@@ -17,7 +18,7 @@ use crate::camera::Intrinsics;
 use crate::error::{Error, Result};
 use crate::flow::{FlowField, is_known};
 use crate::grid::Grid;
-use crate::numeric::hypot;
+use crate::numeric::{atan2, hypot};
 use crate::output::nearest_label;
 use crate::soup::{Piece, Soup};
 
@@ -261,17 +262,9 @@ pub fn true_states(
     }
     let (w, h) = depth1.size();
     let mut points = vec![Vec::new(); soup.pieces.len()];
-    for y in 0..h {
-        for x in 0..w {
-            let (f, a, b) = (*flow12.get(x, y), *depth1.get(x, y), *depth12.get(x, y));
-            if is_known(f) && a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0 {
-                let p1 = Vector3::from(k.ray(x as f64, y as f64)) * f64::from(a);
-                let (x2, y2) = (x as f64 + f64::from(f[0]), y as f64 + f64::from(f[1]));
-                let p2 = Vector3::from(k.ray(x2, y2)) * f64::from(b);
-                if let Some(list) = points.get_mut(nearest_label(labels, w, h, x, y)) {
-                    list.push((p1, p2));
-                }
-            }
+    for (x, y, pair) in surface_point_pairs(depth1, flow12, depth12, k) {
+        if let Some(list) = points.get_mut(nearest_label(labels, w, h, x, y)) {
+            list.push(pair);
         }
     }
     let mut out = soup.clone();
@@ -299,6 +292,84 @@ pub fn true_states(
         kept.iter().for_each(|&i| out.pieces[i].lambda *= scale);
     }
     Ok(out)
+}
+
+/// Every pixel (x, y) of frame 1 with known depth in both cameras and known flow, with its
+/// surface point in camera 1's frame and the same point in camera 2's (metres, or the truth's
+/// units). The three grids must have one size (callers check).
+fn surface_point_pairs<'a>(
+    depth1: &'a Grid<f32>,
+    flow12: &'a FlowField,
+    depth12: &'a Grid<f32>,
+    k: &'a Intrinsics,
+) -> impl Iterator<Item = (usize, usize, (Vector3<f64>, Vector3<f64>))> + 'a {
+    let (w, h) = depth1.size();
+    (0..h)
+        .flat_map(move |y| (0..w).map(move |x| (x, y)))
+        .filter_map(move |(x, y)| {
+            let (f, a, b) = (*flow12.get(x, y), *depth1.get(x, y), *depth12.get(x, y));
+            if !(is_known(f) && a.is_finite() && b.is_finite() && a > 0.0 && b > 0.0) {
+                return None;
+            }
+            let p1 = Vector3::from(k.ray(x as f64, y as f64)) * f64::from(a);
+            let (x2, y2) = (x as f64 + f64::from(f[0]), y as f64 + f64::from(f[1]));
+            let p2 = Vector3::from(k.ray(x2, y2)) * f64::from(b);
+            Some((x, y, (p1, p2)))
+        })
+}
+
+/// How far an estimated camera motion is from the true one, in degrees.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize)]
+pub struct MotionError {
+    /// The angle between the directions of translation (the scale of t is unknown).
+    pub translation_deg: f64,
+    /// The angle of the rotation R_est R_trueᵀ.
+    pub rotation_deg: f64,
+}
+
+/// The camera's true motion between the frames (X₂ = R X₁ + t for every point of the static
+/// world, camera frames), from exact scene flow: the rigid fit ([`rigid_state`]) of the surface
+/// points of the pixels that `moving` marks as still. `None` when fewer than 8 such pixels have
+/// depth in both cameras and flow, or the camera does not translate.
+///
+/// Errors: [`Error::SizeMismatch`] when the four truths differ in size.
+pub fn true_camera_motion(
+    moving: &Grid<bool>,
+    depth1: &Grid<f32>,
+    flow12: &FlowField,
+    depth12: &Grid<f32>,
+    k: &Intrinsics,
+) -> Result<Option<(Matrix3<f64>, Vector3<f64>)>> {
+    depth1.check_same_size(flow12)?;
+    depth1.check_same_size(depth12)?;
+    depth1.check_same_size(moving)?;
+    let still: Vec<(Vector3<f64>, Vector3<f64>)> = surface_point_pairs(depth1, flow12, depth12, k)
+        .filter(|&(x, y, _)| !*moving.get(x, y))
+        .map(|(_, _, pair)| pair)
+        .collect();
+    Ok(rigid_state(&still).map(|state| (state.r, state.t_hat * state.lambda)))
+}
+
+/// The error of the estimated motion (`r`, `t_hat`: rotation and translation direction) against
+/// the truth (`true_r`, `true_t`). Both translations must be non-zero.
+pub fn motion_error(
+    r: &Matrix3<f64>,
+    t_hat: &Vector3<f64>,
+    true_r: &Matrix3<f64>,
+    true_t: &Vector3<f64>,
+) -> MotionError {
+    // Angles as atan2(sin, cos): exact near 0, where acos of a cosine near 1 is not.
+    let (a, b) = (t_hat.normalize(), true_t.normalize());
+    let translation = atan2(a.cross(&b).norm(), a.dot(&b));
+    // R_est R_trueᵀ turns by θ about an axis: its skew part holds 2 sin θ · axis, its trace
+    // 1 + 2 cos θ.
+    let d = r * true_r.transpose();
+    let twice_sin = Vector3::new(d.m32 - d.m23, d.m13 - d.m31, d.m21 - d.m12).norm();
+    let rotation = atan2(twice_sin, d.trace() - 1.0);
+    MotionError {
+        translation_deg: translation.to_degrees(),
+        rotation_deg: rotation.to_degrees(),
+    }
 }
 
 /// The rigid motion X' = R X + t moving the first points of `pairs` onto the second (Kabsch:
@@ -495,6 +566,52 @@ mod tests {
         assert!(rigid_state(&[(Vector3::z(), Vector3::z()); 7]).is_none());
         let small = Grid::filled(3, 3, 1.0f32);
         assert!(true_states(&soup, &labels, &small, &flow, &depth12, &k).is_err());
+    }
+
+    #[test]
+    fn the_camera_motion_is_the_still_pixels_rigid_motion_and_its_error_is_in_degrees() {
+        let k = Intrinsics {
+            fx: 20.0,
+            fy: 20.0,
+            cx: 11.5,
+            cy: 7.5,
+        };
+        let turn = |axis: Vector3<f64>| *nalgebra::Rotation3::new(axis).matrix();
+        let camera = (
+            turn(Vector3::new(0.0, 0.02, 0.01)),
+            Vector3::new(0.3, 0.0, 0.1),
+        );
+        let mover = (
+            turn(Vector3::new(0.0, -0.05, 0.01)),
+            Vector3::new(-0.1, 0.2, -0.4),
+        );
+        let (labels, depth1, flow, depth12) = two_motion_scene(&k, &[camera, mover]);
+        // The right half (label 1) moves in the world.
+        let moving = labels.map(|&l| l == 1);
+        let (r, t) = true_camera_motion(&moving, &depth1, &flow, &depth12, &k)
+            .unwrap()
+            .unwrap();
+        assert!((r - camera.0).norm() < 1e-6 && (t - camera.1).norm() < 1e-6);
+        let exact = motion_error(&r, &t.normalize(), &camera.0, &camera.1);
+        assert!(
+            exact.translation_deg < 1e-4 && exact.rotation_deg < 1e-4,
+            "{exact:?}"
+        );
+        // An estimate 3° off in translation (turned about y) and 0.5° in rotation (about x).
+        let off_t = turn(Vector3::new(0.0, 3f64.to_radians(), 0.0)) * camera.1;
+        let off_r = turn(Vector3::new(0.5f64.to_radians(), 0.0, 0.0)) * camera.0;
+        let error = motion_error(&off_r, &off_t.normalize(), &camera.0, &camera.1);
+        assert!((error.translation_deg - 3.0).abs() < 1e-9, "{error:?}");
+        assert!((error.rotation_deg - 0.5).abs() < 1e-9, "{error:?}");
+        // Everything moving: no camera motion; truths of other sizes: an error.
+        let all = labels.map(|_| true);
+        assert!(
+            true_camera_motion(&all, &depth1, &flow, &depth12, &k)
+                .unwrap()
+                .is_none()
+        );
+        let small = Grid::filled(3, 3, false);
+        assert!(true_camera_motion(&small, &depth1, &flow, &depth12, &k).is_err());
     }
 
     #[test]

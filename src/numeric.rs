@@ -48,6 +48,12 @@ pub fn sin(x: f64) -> f64 {
     libm::sin(x)
 }
 
+/// The angle of the point (x, y) from the positive x axis, in (−π, π] (radians).
+#[inline]
+pub fn atan2(y: f64, x: f64) -> f64 {
+    libm::atan2(y, x)
+}
+
 /// Hyperbolic tangent.
 #[inline]
 pub fn tanh(x: f64) -> f64 {

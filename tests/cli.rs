@@ -518,7 +518,7 @@ fn eval_groups_splits_the_error_by_ground_truth_group() {
     // group. Its pixels partition the valid pixels and its MRE shares add up to the case's MRE.
     // With exact flow the street's static world (group 0) lies on the ego-motion and at its
     // true depth (ratio within 2 % of 1 after the global median alignment; 1.000 measured at
-    // this size), and each of its two cars has a row.
+    // this size), and each of its two cars has a row; the ego-motion's error is reported.
     let dir = temp_dir("eval-groups");
     let case = synth_scene(&dir, "street", "512x218");
     let json = dir.join("eval.json");
@@ -568,5 +568,13 @@ fn eval_groups_splits_the_error_by_ground_truth_group() {
     assert!(
         world[5] == 0.0 && world[6] >= 0.95,
         "static world on {world:?}"
+    );
+    // The ego-motion against the camera's true motion (the still pixels' scene flow): exact
+    // flow finds it within 0.005° here (a compromise with the cars would be degrees off).
+    let ego = &result[0]["ego_error"];
+    let (t, r) = (ego["translation_deg"].as_f64(), ego["rotation_deg"].as_f64());
+    assert!(
+        t.is_some_and(|t| t < 0.5) && r.is_some_and(|r| r < 0.05),
+        "ego-motion error {ego}"
     );
 }

@@ -6,7 +6,9 @@ use std::time::Instant;
 use serde::Serialize;
 use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::camera::resolve_intrinsics;
-use superpixel_soup::eval::{DepthMetrics, depth_metrics, median, true_states};
+use superpixel_soup::eval::{
+    DepthMetrics, MotionError, depth_metrics, median, motion_error, true_camera_motion, true_states,
+};
 use superpixel_soup::flow::FlowParams;
 use superpixel_soup::formats::case::{Case, read_case};
 use superpixel_soup::formats::write_file;
@@ -63,6 +65,9 @@ struct CaseResult {
     oracle_group_mre: Option<f64>,
     /// MRE of one constant depth everywhere (the floor a reconstruction must beat).
     constant_mre: f64,
+    /// The error of the estimated ego-motion (motion hypothesis 0) against the camera's true
+    /// motion (when the case has scene flow and a mask of what moves: the synthetic scenes).
+    ego_error: Option<MotionError>,
     seconds: f64,
     hypotheses: usize,
     degenerate: usize,
@@ -74,16 +79,16 @@ pub fn run(args: Args) -> Result<()> {
     let params = args.pipeline.params()?;
     let flow_params = args.pipeline.flow_params()?;
     println!(
-        "| case | MRE | AbsRel | δ<1.25 | coverage | MRE confident | confident share | oracle-superpixel MRE | oracle-group MRE | constant-depth MRE | hypotheses | seconds |"
+        "| case | MRE | AbsRel | δ<1.25 | coverage | MRE confident | confident share | oracle-superpixel MRE | oracle-group MRE | constant-depth MRE | ego-motion error t° / R° | hypotheses | seconds |"
     );
-    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
+    println!("| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |");
     let mut results = Vec::new();
     for dir in &args.cases {
         let case = read_case(dir)?;
         let computed = (!args.gt_flow).then_some(flow_params);
         let (result, rec) = evaluate(&case, &params, computed)?;
         println!(
-            "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {:.3} | {:.4} | {} | {:.4} | {} | {:.2} |",
+            "| {} | {:.4} | {:.4} | {:.3} | {:.3} | {:.4} | {:.3} | {:.4} | {} | {:.4} | {} | {} | {:.2} |",
             result.case,
             result.metrics.mre,
             result.metrics.abs_rel,
@@ -96,6 +101,10 @@ pub fn run(args: Args) -> Result<()> {
                 .oracle_group_mre
                 .map_or("–".into(), |m| format!("{m:.4}")),
             result.constant_mre,
+            result.ego_error.map_or("–".into(), |e| format!(
+                "{:.2} / {:.3}",
+                e.translation_deg, e.rotation_deg
+            )),
             result.hypotheses,
             result.seconds
         );
@@ -158,6 +167,7 @@ fn evaluate(
         oracle_superpixel_mre,
         oracle_group_mre,
         constant_mre: depth_metrics(gt, &Grid::filled(gt.width(), gt.height(), 1.0f32))?.mre,
+        ego_error: ego_error(&rec, case, gt, &camera.intrinsics)?,
         seconds,
         hypotheses: rec.report.hypotheses,
         degenerate: rec.report.degenerate,
@@ -165,6 +175,27 @@ fn evaluate(
         energy_end: rec.report.scales.energy_end,
     };
     Ok((result, rec))
+}
+
+/// The error of `rec`'s ego-motion (its unit-scale soup's hypothesis 0) against the camera's
+/// true motion, when `case` has scene flow and `moving1.png` (`k`: the case's intrinsics at its
+/// own resolution, where its truths are).
+fn ego_error(
+    rec: &Reconstruction,
+    case: &Case,
+    depth1: &Grid<f32>,
+    k: &Intrinsics,
+) -> Result<Option<MotionError>> {
+    let (Some(moving), Some(flow12), Some(depth12), Some(ego)) = (
+        &case.moving1,
+        &case.flow12,
+        &case.depth12,
+        rec.unit_soup.hypotheses.first(),
+    ) else {
+        return Ok(None);
+    };
+    let truth = true_camera_motion(moving, depth1, flow12, depth12, k)?;
+    Ok(truth.map(|(r, t)| motion_error(&ego.r, &ego.t, &r, &t)))
 }
 
 /// The depth at the input resolution (`width` × `height`) where the superpixel's scale is
