@@ -17,8 +17,9 @@ use serde::Serialize;
 use crate::camera::Intrinsics;
 use crate::error::{Error, Result};
 use crate::flow::{FlowField, is_known};
+use crate::geometry::essential::Motion;
 use crate::grid::Grid;
-use crate::numeric::{atan2, hypot};
+use crate::numeric::hypot;
 use crate::output::nearest_label;
 use crate::soup::{Piece, Soup};
 
@@ -327,10 +328,11 @@ pub struct MotionError {
     pub rotation_deg: f64,
 }
 
-/// The camera's true motion between the frames (X₂ = R X₁ + t for every point of the static
-/// world, camera frames), from exact scene flow: the rigid fit ([`rigid_state`]) of the surface
-/// points of the pixels that `moving` marks as still. `None` when fewer than 8 such pixels have
-/// depth in both cameras and flow, or the camera does not translate.
+/// The camera's true motion between the frames (X₂ = R X₁ + λ t̂ for every point of the static
+/// world, camera frames; t̂ of unit length), from exact scene flow: the rigid fit
+/// ([`rigid_state`]) of the surface points of the pixels that `moving` marks as still. `None`
+/// when fewer than 8 such pixels have depth in both cameras and flow, or the camera does not
+/// translate.
 ///
 /// Errors: [`Error::SizeMismatch`] when the four truths differ in size.
 pub fn true_camera_motion(
@@ -339,7 +341,7 @@ pub fn true_camera_motion(
     flow12: &FlowField,
     depth12: &Grid<f32>,
     k: &Intrinsics,
-) -> Result<Option<(Matrix3<f64>, Vector3<f64>)>> {
+) -> Result<Option<Motion>> {
     depth1.check_same_size(flow12)?;
     depth1.check_same_size(depth12)?;
     depth1.check_same_size(moving)?;
@@ -347,28 +349,17 @@ pub fn true_camera_motion(
         .filter(|&(x, y, _)| !*moving.get(x, y))
         .map(|(_, _, pair)| pair)
         .collect();
-    Ok(rigid_state(&still).map(|state| (state.r, state.t_hat * state.lambda)))
+    Ok(rigid_state(&still).map(|state| Motion {
+        r: state.r,
+        t: state.t_hat,
+    }))
 }
 
-/// The error of the estimated motion (`r`, `t_hat`: rotation and translation direction) against
-/// the truth (`true_r`, `true_t`). Both translations must be non-zero.
-pub fn motion_error(
-    r: &Matrix3<f64>,
-    t_hat: &Vector3<f64>,
-    true_r: &Matrix3<f64>,
-    true_t: &Vector3<f64>,
-) -> MotionError {
-    // Angles as atan2(sin, cos): exact near 0, where acos of a cosine near 1 is not.
-    let (a, b) = (t_hat.normalize(), true_t.normalize());
-    let translation = atan2(a.cross(&b).norm(), a.dot(&b));
-    // R_est R_trueᵀ turns by θ about an axis: its skew part holds 2 sin θ · axis, its trace
-    // 1 + 2 cos θ.
-    let d = r * true_r.transpose();
-    let twice_sin = Vector3::new(d.m32 - d.m23, d.m13 - d.m31, d.m21 - d.m12).norm();
-    let rotation = atan2(twice_sin, d.trace() - 1.0);
+/// The error of the `estimated` motion against the `truth`.
+pub fn motion_error(estimated: &Motion, truth: &Motion) -> MotionError {
     MotionError {
-        translation_deg: translation.to_degrees(),
-        rotation_deg: rotation.to_degrees(),
+        translation_deg: estimated.translation_angle(truth).to_degrees(),
+        rotation_deg: estimated.rotation_angle(truth).to_degrees(),
     }
 }
 
@@ -545,6 +536,7 @@ mod tests {
             pieces: vec![placeholder; 3],
             hypotheses: Vec::new(),
             noise_px: 0.0,
+            ego_rival: None,
         };
         let states = true_states(&soup, &labels, &depth1, &flow, &depth12, &k).unwrap();
         for (piece, (r, t)) in states.pieces.iter().zip(&motions) {
@@ -588,19 +580,25 @@ mod tests {
         let (labels, depth1, flow, depth12) = two_motion_scene(&k, &[camera, mover]);
         // The right half (label 1) moves in the world.
         let moving = labels.map(|&l| l == 1);
-        let (r, t) = true_camera_motion(&moving, &depth1, &flow, &depth12, &k)
+        let truth = true_camera_motion(&moving, &depth1, &flow, &depth12, &k)
             .unwrap()
             .unwrap();
-        assert!((r - camera.0).norm() < 1e-6 && (t - camera.1).norm() < 1e-6);
-        let exact = motion_error(&r, &t.normalize(), &camera.0, &camera.1);
+        let exact = Motion {
+            r: camera.0,
+            t: camera.1.normalize(),
+        };
+        assert!((truth.r - exact.r).norm() < 1e-6 && (truth.t - exact.t).norm() < 1e-6);
+        let none = motion_error(&truth, &exact);
         assert!(
-            exact.translation_deg < 1e-4 && exact.rotation_deg < 1e-4,
-            "{exact:?}"
+            none.translation_deg < 1e-4 && none.rotation_deg < 1e-4,
+            "{none:?}"
         );
         // An estimate 3° off in translation (turned about y) and 0.5° in rotation (about x).
-        let off_t = turn(Vector3::new(0.0, 3f64.to_radians(), 0.0)) * camera.1;
-        let off_r = turn(Vector3::new(0.5f64.to_radians(), 0.0, 0.0)) * camera.0;
-        let error = motion_error(&off_r, &off_t.normalize(), &camera.0, &camera.1);
+        let off = Motion {
+            r: turn(Vector3::new(0.5f64.to_radians(), 0.0, 0.0)) * exact.r,
+            t: turn(Vector3::new(0.0, 3f64.to_radians(), 0.0)) * exact.t,
+        };
+        let error = motion_error(&off, &exact);
         assert!((error.translation_deg - 3.0).abs() < 1e-9, "{error:?}");
         assert!((error.rotation_deg - 0.5).abs() < 1e-9, "{error:?}");
         // Everything moving: no camera motion; truths of other sizes: an error.

@@ -184,6 +184,7 @@ mod tests {
             ],
             hypotheses: Vec::new(),
             noise_px: 0.0,
+            ego_rival: None,
         };
         (soup, Grid::from_fn(6, 2, |x, _| (x / 2) as u32))
     }

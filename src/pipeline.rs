@@ -18,7 +18,7 @@ use crate::soup::Soup;
 use crate::soup::ensemble::{
     EnsembleParams, EnsembleReport, MAX_MEMBERS, SAMPLE_STRIDE, Vote, fuse_scales,
 };
-use crate::soup::init::{InitParams, unit_scale_soup};
+use crate::soup::init::{EgoRival, InitParams, unit_scale_soup};
 use crate::soup::refine::{self, RefineParams, RefineReport};
 use crate::soup::scales::{ScaleInputs, ScaleParams, ScaleReport, depth_confidence, solve_scales};
 use crate::superpixels::graph::{BoundaryGraph, KnnGraph, boundary_graph, knn_graph};
@@ -163,6 +163,9 @@ pub struct Report {
     pub superpixels: usize,
     pub degenerate: usize,
     pub hypotheses: usize,
+    /// The strongest rival of the camera's motion (a candidate far from it that explains the
+    /// image nearly as well; [`EgoRival`]); `None` when no candidate lay far from it.
+    pub ego_rival: Option<EgoRival>,
     /// The scale solve: energies, rigid segments, pieces moved by tail control.
     pub scales: ScaleReport,
     /// The refinement's energy per iteration (`None` when turned off).
@@ -262,8 +265,10 @@ impl Reconstruction {
 /// finish (fraction in [0, 1] within the stage).
 ///
 /// With computed flow, a reconstruction whose scales are pinned on less than
-/// [`Params::min_pinned_share`] of the image is made again from the flow of the next finer
-/// preset, and the pass that pins most is kept (the stages report their progress again from
+/// [`Params::min_pinned_share`] of the image, or whose camera motion is ambiguous
+/// ([`InitParams::ambiguous_ego_excess`]), is made again from the flow of the next finer
+/// preset, and the best pass is kept: an unambiguous camera motion first, then the larger
+/// pinned share (the stages report their progress again from
 /// the flow on; notes say what happened, and the stage times are summed over the passes).
 /// The kept pass is then fused with its members ([`Stage::Ensemble`], last: see
 /// [`crate::soup::ensemble`]), once, and its depth and confidence are made again from the fused
@@ -341,24 +346,61 @@ struct Pass {
     used: FlowParams,
     /// Its [`pinned_share`].
     pinned: f64,
+    /// Whether its camera motion has a rival that explains the image nearly as well
+    /// ([`EgoRival::is_ambiguous`]).
+    ambiguous: bool,
 }
 
 impl Pass {
     fn of(rec: &Reconstruction, asked: FlowParams) -> Self {
+        let init = &rec.report.params.init;
         Pass {
             asked,
             used: rec.report.flow.unwrap_or(asked),
             pinned: pinned_share(rec),
+            ambiguous: rec.report.ego_rival.is_some_and(|r| r.is_ambiguous(init)),
+        }
+    }
+
+    /// Whether a finer preset's flow should be tried after this pass: its camera motion is
+    /// ambiguous, or it pins less than `min_pinned_share` of the image.
+    fn wants_finer(&self, min_pinned_share: f64) -> bool {
+        self.ambiguous || self.pinned < min_pinned_share
+    }
+
+    /// Whether this pass is better than `other`: an unambiguous camera motion first, then the
+    /// larger pinned share (not better on a tie).
+    fn beats(&self, other: &Pass) -> bool {
+        (!self.ambiguous, self.pinned) > (!other.ambiguous, other.pinned)
+    }
+
+    /// Why a finer preset's flow is tried after this pass, for the report's notes.
+    fn why_finer(&self, rival: Option<EgoRival>) -> String {
+        match rival.filter(|_| self.ambiguous) {
+            Some(r) => format!(
+                "the camera's motion was ambiguous with the flow of preset {} (a motion {:.1}° \
+                 apart explained the image within {:.1} %)",
+                preset_name(&self.used),
+                r.angle_deg,
+                100.0 * r.excess
+            ),
+            None => format!(
+                "the depths of only {:.0} % of the image were pinned with the flow of preset {}",
+                100.0 * self.pinned,
+                preset_name(&self.used)
+            ),
         }
     }
 }
 
 /// Passes of [`reconstruct_from`] from the flow of `first`, then of the next finer preset while
-/// the last pass pins less than [`Params::min_pinned_share`]: flow too coarse to show where
-/// movers meet the world leaves their scales to guesses. Returns the pass that pins most (the
-/// earliest on a tie), with the notes of every pass in the order they ran and its stage times
-/// summed over all of them. Only one finished pass is held: an earlier pass that pins more than
-/// the later ones is made again at the end (the pipeline is deterministic), so the memory is
+/// the last pass pins less than [`Params::min_pinned_share`] (flow too coarse to show where
+/// movers meet the world leaves their scales to guesses) or its camera motion is ambiguous
+/// (flow too coarse to tell the camera's motion from a compromise with the movers). Returns the
+/// best pass ([`Pass::beats`]; the earliest on a tie), with the notes of every pass in the
+/// order they ran and its stage times summed over all of them. Only one finished pass is held:
+/// an earlier pass better than the later ones is made again at the end (the pipeline is
+/// deterministic), so the memory is
 /// that of one reconstruction and one running pass (the page's budget), plus a copy of frame 1's
 /// superpixels and graphs that the later passes share (they do not depend on the flow; a few
 /// bytes per pixel). A later pass that fails leaves the best one so far, with a note.
@@ -373,15 +415,16 @@ fn reconstruct_until_pinned(
     let mut shared: Option<Segmentation> = None;
     let mut best = Pass::of(&first_pass, first);
     let mut last = best;
+    let mut last_rival = first_pass.report.ego_rival;
     let mut notes = first_pass.report.notes.clone();
     let mut spent = first_pass.report.timings_ms.clone();
     let mut held = Some(first_pass);
-    while let Some(finer) = (last.used.finer()).filter(|_| last.pinned < params.min_pinned_share) {
+    while let Some(finer) =
+        (last.used.finer()).filter(|_| last.wants_finer(params.min_pinned_share))
+    {
         notes.push(format!(
-            "the depths of only {:.0} % of the image were pinned with the flow of preset {}; \
-             reconstructed again with preset {}",
-            100.0 * last.pinned,
-            preset_name(&last.used),
+            "{}; reconstructed again with preset {}",
+            last.why_finer(last_rival),
             preset_name(&finer),
         ));
         if shared.is_none() {
@@ -400,7 +443,8 @@ fn reconstruct_until_pinned(
                 notes.extend_from_slice(&again.report.notes[pair.notes.len()..]);
                 spent.extend_from_slice(&again.report.timings_ms);
                 last = Pass::of(&again, finer);
-                if last.pinned > best.pinned {
+                last_rival = again.report.ego_rival;
+                if last.beats(&best) {
                     (best, held) = (last, Some(again));
                 }
             }
@@ -605,6 +649,7 @@ fn reconstruct_from(
             .filter(|p| p.degenerate.is_some())
             .count(),
         hypotheses: soup.hypotheses.len(),
+        ego_rival: unit_soup.ego_rival,
         scales,
         refine,
         ensemble: None,

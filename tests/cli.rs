@@ -572,7 +572,10 @@ fn eval_groups_splits_the_error_by_ground_truth_group() {
     // The ego-motion against the camera's true motion (the still pixels' scene flow): exact
     // flow finds it within 0.005° here (a compromise with the cars would be degrees off).
     let ego = &result[0]["ego_error"];
-    let (t, r) = (ego["translation_deg"].as_f64(), ego["rotation_deg"].as_f64());
+    let (t, r) = (
+        ego["translation_deg"].as_f64(),
+        ego["rotation_deg"].as_f64(),
+    );
     assert!(
         t.is_some_and(|t| t < 0.5) && r.is_some_and(|r| r < 0.05),
         "ego-motion error {ego}"

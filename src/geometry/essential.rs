@@ -4,6 +4,7 @@
 use nalgebra::{Matrix3, Vector3};
 
 use super::{Correspondence, dlt, skew, triangulate};
+use crate::numeric::atan2;
 
 /// A rigid motion X' = R X + t̂ with unit translation direction t̂ (scale unknown).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -16,6 +17,22 @@ impl Motion {
     /// Its essential matrix [t̂]ₓ R.
     pub fn essential(&self) -> Matrix3<f64> {
         skew(&self.t) * self.r
+    }
+
+    /// The angle between its direction of translation and `other`'s (radians, in [0, π]; both
+    /// translations non-zero).
+    pub fn translation_angle(&self, other: &Motion) -> f64 {
+        // atan2(sin, cos): exact near 0, where acos of a cosine near 1 is not.
+        let (a, b) = (self.t.normalize(), other.t.normalize());
+        atan2(a.cross(&b).norm(), a.dot(&b))
+    }
+
+    /// The angle of the rotation R Rₒᵀ between its rotation and `other`'s (radians, in [0, π]).
+    pub fn rotation_angle(&self, other: &Motion) -> f64 {
+        // A rotation by θ about an axis: its skew part holds 2 sin θ · axis, its trace 1 + 2 cos θ.
+        let d = self.r * other.r.transpose();
+        let twice_sin = Vector3::new(d.m32 - d.m23, d.m13 - d.m31, d.m21 - d.m12).norm();
+        atan2(twice_sin, d.trace() - 1.0)
     }
 }
 

@@ -267,6 +267,7 @@ mod tests {
             pieces: vec![piece; n],
             hypotheses: Vec::new(),
             noise_px: 0.1,
+            ego_rival: None,
         };
         let labels = Grid::from_fn(10 * n, 20, |x, _| (x / 10) as u32);
         (soup, labels)

@@ -370,6 +370,7 @@ mod tests {
             pieces,
             hypotheses: Vec::new(),
             noise_px: 0.0,
+            ego_rival: None,
         };
         (soup, Superpixels { labels, segments })
     }

@@ -1,7 +1,7 @@
 //! The unit-scale soup: a rigid motion (R, t̂) and a plane m for every superpixel.
 //!
 //! 1. Correspondences: a spread-out sample of each superpixel's pixels with reliable flow.
-//! 2. Motion hypotheses: the camera's ego-motion first (hypothesis 0, `ego_motion`: the motion
+//! 2. Motion hypotheses: the camera's ego-motion first (hypothesis 0, `ego_candidates`: the motion
 //!    under which the most superpixels are planar patches, not the one with the most epipolar
 //!    inliers), then sequential RANSAC on what it leaves (other movers), then five-point RANSAC
 //!    on each superpixel still badly explained together with its K-NN neighbours (small movers,
@@ -78,6 +78,19 @@ pub struct InitParams {
     pub ego_preference_px: f64,
     /// A superpixel's depth counts as observed when its translation moves it by this much (px).
     pub min_parallax_px: f64,
+    /// A candidate for the camera's motion whose direction of travel lies more than this many
+    /// degrees from the chosen one's is its rival (see [`EgoRival`]). 5°: the best candidates
+    /// of every case and preset lie within 0.6° of each other when they agree; a compromise
+    /// between the camera and the crowd's walkers lies 7–11° off.
+    pub rival_ego_deg: f64,
+    /// The camera's motion is ambiguous when its rival scores within this share of its own
+    /// planar score ([`EgoRival::excess`]); with computed flow the pipeline then makes the
+    /// reconstruction again from a finer preset's flow. 0.03: at five seeds, the crowd's rival
+    /// with preset fast (quarter-resolution flow, where the chosen motion was 10.4° off and the
+    /// depth worse than a constant) scored within 1.9–2.7 % at four and 9.3 % at one; with
+    /// preset high every case's rival stays above 5 %, except the creature's 4.5° off at 1.5 %
+    /// (no rival: under 5°); the flag's with preset fast 3.6–3.8 %.
+    pub ambiguous_ego_excess: f64,
     /// Seed of the RANSAC sampling.
     pub seed: u64,
 }
@@ -96,8 +109,31 @@ impl Default for InitParams {
             merge_gap: 0.15,
             ego_preference_px: 0.3,
             min_parallax_px: 0.05,
+            rival_ego_deg: 5.0,
+            ambiguous_ego_excess: 0.03,
             seed: 2017,
         }
+    }
+}
+
+/// The strongest rival of the camera's motion: the best-scoring candidate (`ego_candidates`)
+/// whose direction of travel lies more than [`InitParams::rival_ego_deg`] from the chosen one's.
+/// A rival scoring nearly as well means the flow does not single out the camera's motion: where
+/// walkers fill half the view, a compromise between them and the camera explains about as many
+/// superpixels as the camera's own motion (docs/ARCHITECTURE.md, Pitfalls).
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct EgoRival {
+    /// The angle between its direction of travel and the chosen motion's (degrees).
+    pub angle_deg: f64,
+    /// How much higher its planar score is than the chosen motion's, as a share of that
+    /// (0.02: 2 % higher; lower scores are better).
+    pub excess: f64,
+}
+
+impl EgoRival {
+    /// Whether the rival scores within `params.ambiguous_ego_excess` of the chosen motion.
+    pub fn is_ambiguous(&self, params: &InitParams) -> bool {
+        self.excess < params.ambiguous_ego_excess
     }
 }
 
@@ -139,7 +175,9 @@ pub fn unit_scale_soup(
         everywhere: Vec::new(),
         deadband: 0.0,
     };
-    let ego = ego_motion(&samples, &all, focal, params, &mut rng);
+    let candidates = ego_candidates(&samples, &all, focal, params, &mut rng);
+    let ego = candidates.first().map(|&(_, m)| m);
+    let ego_rival = ego_rival(&candidates, params.rival_ego_deg);
     for motion in global_hypotheses(&all, ego, focal, params, &mut rng)? {
         fit.add(motion, None);
     }
@@ -195,6 +233,7 @@ pub fn unit_scale_soup(
         pieces: fill_degenerate(pieces, sp, adjacency),
         hypotheses: fit.hypotheses,
         noise_px,
+        ego_rival,
     })
 }
 
@@ -601,19 +640,20 @@ fn check_parallax(all: &[Correspondence], focal: f64) -> Result<()> {
 }
 
 /// Planar costs above this (px) count as this much when motions compete for the whole image in
-/// [`ego_motion`]: a superpixel this badly explained belongs to something else (0.5 px: above
+/// [`ego_candidates`]: a superpixel this badly explained belongs to something else (0.5 px: above
 /// the computed flow's noise, well below a mover's misfit).
 const EGO_TRUNCATION_PX: f64 = 0.5;
 
-/// Candidate motions [`ego_motion`] scores by planes (5×) and then refines (1×).
+/// Candidate motions [`ego_candidates`] scores by planes (5×) and then refines (1×).
 const EGO_CANDIDATES: usize = 4;
 
-/// Correspondences per superpixel when [`ego_motion`] first scores candidates by planes: every
+/// Correspondences per superpixel when [`ego_candidates`] first scores candidates by planes: every
 /// ⌊n / 8⌋-th of its n points, so 8 to 15 of them (superpixels with fewer are left out).
 const EGO_LIGHT_SAMPLES: usize = 8;
 
-/// The camera's ego-motion: the motion under which the most superpixels are explained as
-/// planar patches, scored by Σ_i min(planar cost_i, 0.5 px) over superpixels (lower is better).
+/// Candidates for the camera's ego-motion with their planar scores, best first: the ego-motion
+/// is the motion under which the most superpixels are explained as planar patches, scored by
+/// Σ_i min(planar cost_i, 0.5 px) over superpixels (lower is better).
 /// Counting epipolar inliers (RANSAC's usual score) does not find it in a crowd: a point only
 /// has to lie on its epipolar line, and a compromise between the camera and the walkers puts
 /// more points within 1 px of theirs than the true motion does (measured on the synthetic
@@ -622,19 +662,19 @@ const EGO_LIGHT_SAMPLES: usize = 8;
 /// samples, ranked first by epipolar inliers at 1 px (the cheap score); the best
 /// 5 × [`EGO_CANDIDATES`] are scored by planes on 8–15 points per superpixel ([`EGO_LIGHT_SAMPLES`]),
 /// and the best [`EGO_CANDIDATES`] refined (Levenberg–Marquardt on the points of the
-/// superpixels they explain, kept while the full planar score falls). `None` when no sample
-/// gives a motion.
-fn ego_motion(
+/// superpixels they explain, kept while the full planar score falls). Empty when no sample
+/// gives a motion. The runner-up far from the first is its rival ([`EgoRival`]).
+fn ego_candidates(
     samples: &[Vec<Correspondence>],
     all: &[Correspondence],
     focal: f64,
     params: &InitParams,
     rng: &mut Rng,
-) -> Option<Motion> {
+) -> Vec<(f64, Motion)> {
     let stride = all.len().div_ceil(1000).max(1);
     let sparse: Vec<Correspondence> = all.iter().step_by(stride).copied().collect();
     if sparse.len() < 5 {
-        return None;
+        return Vec::new();
     }
     let within = (1.0 / focal).powi(2);
     let mut ranked: Vec<(usize, Motion)> = Vec::new();
@@ -679,7 +719,7 @@ fn ego_motion(
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     scored.truncate(EGO_CANDIDATES);
     let full_score = |m: &Motion| score(m, &mut full.iter().copied());
-    scored
+    let mut refined: Vec<(f64, Motion)> = scored
         .into_iter()
         .map(|(_, mut m)| {
             let mut best = full_score(&m);
@@ -699,8 +739,24 @@ fn ego_motion(
             }
             (best, m)
         })
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, m)| m)
+        .collect();
+    refined.sort_by(|a, b| a.0.total_cmp(&b.0));
+    refined
+}
+
+/// The rival ([`EgoRival`]) of the first of `candidates` ((planar score, motion), best first)
+/// among the others more than `min_angle_deg` away from it.
+fn ego_rival(candidates: &[(f64, Motion)], min_angle_deg: f64) -> Option<EgoRival> {
+    let (&(best, chosen), others) = candidates.split_first()?;
+    others
+        .iter()
+        .map(|(score, m)| (score, m.translation_angle(&chosen).to_degrees()))
+        .filter(|&(_, angle)| angle > min_angle_deg)
+        .min_by(|a, b| a.0.total_cmp(b.0))
+        .map(|(score, angle_deg)| EgoRival {
+            angle_deg,
+            excess: (score - best) / best.max(f64::MIN_POSITIVE),
+        })
 }
 
 /// The ego-motion (`ego`, when found; else the first RANSAC motion stands in for it) and the
@@ -947,18 +1003,56 @@ mod tests {
         let all: Vec<Correspondence> = samples.iter().flatten().copied().collect();
         let params = InitParams::default();
         let angle = |m: &Motion| m.t.dot(&motion.t).clamp(-1.0, 1.0).acos().to_degrees();
-        let ego = ego_motion(&samples, &all, FOCAL, &params, &mut Rng::new(4));
-        let ego = ego.expect("a motion from 1800 points");
+        let candidates = ego_candidates(&samples, &all, FOCAL, &params, &mut Rng::new(4));
+        let &(_, ego) = candidates.first().expect("a motion from 1800 points");
         assert!(angle(&ego) < 0.5, "ego-motion {:.2}° off", angle(&ego));
+        assert!(
+            candidates.windows(2).all(|w| w[0].0 <= w[1].0),
+            "best first"
+        );
         // Too few points for a five-point sample: no ego-motion, and the first RANSAC motion
         // stands in as hypothesis 0.
-        assert!(ego_motion(&samples, &all[..4], FOCAL, &params, &mut Rng::new(4)).is_none());
+        assert!(ego_candidates(&samples, &all[..4], FOCAL, &params, &mut Rng::new(4)).is_empty());
         let hypotheses = global_hypotheses(&all, None, FOCAL, &params, &mut Rng::new(5)).unwrap();
         assert!(
             angle(&hypotheses[0]) < 0.5,
             "RANSAC {:.2}° off",
             angle(&hypotheses[0])
         );
+    }
+
+    #[test]
+    fn the_rival_is_the_best_candidate_far_from_the_chosen_motion() {
+        // The camera's motion with its direction of travel turned by `deg` about an axis
+        // across it.
+        let turned = |deg: f64, score: f64| {
+            let m = camera();
+            let across = nalgebra::Unit::new_normalize(m.t.cross(&Vector3::y()));
+            let t = nalgebra::Rotation3::from_axis_angle(&across, deg.to_radians()) * m.t;
+            (score, Motion { r: m.r, t })
+        };
+        // A near twin (1°) scores best after the chosen motion but is no rival; of the two far
+        // ones the better (8°, 2 % worse) is.
+        let candidates = [
+            turned(0.0, 100.0),
+            turned(1.0, 100.5),
+            turned(8.0, 102.0),
+            turned(-12.0, 101.0 + 5.0),
+        ];
+        let rival = ego_rival(&candidates, 5.0).expect("a rival 8° away");
+        assert!((rival.angle_deg - 8.0).abs() < 1e-6, "{rival:?}");
+        assert!((rival.excess - 0.02).abs() < 1e-12, "{rival:?}");
+        let params = InitParams::default();
+        assert!(rival.is_ambiguous(&params), "2 % is within the default 3 %");
+        let clear = EgoRival {
+            excess: 0.05,
+            ..rival
+        };
+        assert!(!clear.is_ambiguous(&params));
+        // Only near twins, or one candidate: no rival.
+        assert!(ego_rival(&candidates[..2], 5.0).is_none());
+        assert!(ego_rival(&candidates[..1], 5.0).is_none());
+        assert!(ego_rival(&[], 5.0).is_none());
     }
 
     #[test]

@@ -76,4 +76,7 @@ pub struct Soup {
     /// The flow's noise as the soup sees it (px): the median over superpixels of the mean
     /// transfer error of their motion with their best plane.
     pub noise_px: f64,
+    /// The strongest rival of the camera's motion (hypothesis 0) that the unit-scale soup
+    /// found (`None` when there was none, or for soups not made by it).
+    pub ego_rival: Option<init::EgoRival>,
 }

@@ -864,6 +864,7 @@ mod tests {
             pieces: vec![a[0], b[0]],
             hypotheses: Vec::new(),
             noise_px: 0.0,
+            ego_rival: None,
         };
         let terms = problem.energy_terms(&soup);
         let sum = terms.proj + terms.contacts + terms.ground;
@@ -940,6 +941,7 @@ mod tests {
             pieces,
             hypotheses: Vec::new(),
             noise_px: 0.1,
+            ego_rival: None,
         };
         (soup, problem)
     }

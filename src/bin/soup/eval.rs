@@ -195,7 +195,7 @@ fn ego_error(
         return Ok(None);
     };
     let truth = true_camera_motion(moving, depth1, flow12, depth12, k)?;
-    Ok(truth.map(|(r, t)| motion_error(&ego.r, &ego.t, &r, &t)))
+    Ok(truth.map(|truth| motion_error(ego, &truth)))
 }
 
 /// The depth at the input resolution (`width` × `height`) where the superpixel's scale is
