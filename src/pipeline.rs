@@ -331,7 +331,10 @@ pub fn reconstruct_unfused(
     }
     match flow {
         FlowInput::Given(given) => {
-            reconstruct_from(pair, FlowInput::Given(given), params, None, progress)
+            let mut rec = reconstruct_from(pair, FlowInput::Given(given), params, None, progress)?;
+            let note = ambiguity_note(rec.report.ego_rival, &params.init);
+            rec.report.notes.extend(note);
+            Ok(rec)
         }
         FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, params, progress),
     }
@@ -479,9 +482,25 @@ fn reconstruct_until_pinned(
             again
         }
     };
+    notes.extend(ambiguity_note(kept.report.ego_rival, &params.init));
     kept.report.notes = notes;
     kept.report.timings_ms = summed_by_stage(&spent);
     Ok(kept)
+}
+
+/// A note for the report when the kept pass's camera motion, whose rival is `rival`, is
+/// ambiguous ([`EgoRival::is_ambiguous`] with `init`): no finer flow was left to try (or the
+/// flow was given), so the user should know.
+fn ambiguity_note(rival: Option<EgoRival>, init: &InitParams) -> Option<String> {
+    let rival = rival?;
+    rival.is_ambiguous(init).then(|| {
+        format!(
+            "the camera's motion is ambiguous: a motion {:.1}° from it explains the image within \
+             {:.1} % as well, so the depths may be distorted",
+            rival.angle_deg,
+            100.0 * rival.excess
+        )
+    })
 }
 
 /// The name of `params`' preset, or "custom".
@@ -1109,6 +1128,21 @@ fn now_ms() -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn an_ambiguous_camera_motion_is_noted() {
+        let init = InitParams::default();
+        let rival = |excess| {
+            Some(EgoRival {
+                angle_deg: 8.25,
+                excess,
+            })
+        };
+        let note = ambiguity_note(rival(0.019), &init).expect("1.9 % is ambiguous");
+        assert!(note.contains("8.2°") && note.contains("1.9 %"), "{note}");
+        assert!(ambiguity_note(rival(0.05), &init).is_none());
+        assert!(ambiguity_note(None, &init).is_none());
+    }
 
     #[test]
     fn members_come_back_in_the_order_of_their_counts_with_their_errors() {
