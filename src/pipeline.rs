@@ -349,19 +349,21 @@ struct Pass {
     used: FlowParams,
     /// Its [`pinned_share`].
     pinned: f64,
-    /// Whether its camera motion has a rival that explains the image nearly as well
-    /// ([`EgoRival::is_ambiguous`]).
+    /// The rival of its camera motion.
+    rival: Option<EgoRival>,
+    /// Whether that rival explains the image nearly as well ([`EgoRival::is_ambiguous`]).
     ambiguous: bool,
 }
 
 impl Pass {
     fn of(rec: &Reconstruction, asked: FlowParams) -> Self {
-        let init = &rec.report.params.init;
+        let (rival, init) = (rec.report.ego_rival, &rec.report.params.init);
         Pass {
             asked,
             used: rec.report.flow.unwrap_or(asked),
             pinned: pinned_share(rec),
-            ambiguous: rec.report.ego_rival.is_some_and(|r| r.is_ambiguous(init)),
+            rival,
+            ambiguous: rival.is_some_and(|r| r.is_ambiguous(init)),
         }
     }
 
@@ -378,8 +380,8 @@ impl Pass {
     }
 
     /// Why a finer preset's flow is tried after this pass, for the report's notes.
-    fn why_finer(&self, rival: Option<EgoRival>) -> String {
-        match rival.filter(|_| self.ambiguous) {
+    fn why_finer(&self) -> String {
+        match self.rival.filter(|_| self.ambiguous) {
             Some(r) => format!(
                 "the camera's motion was ambiguous with the flow of preset {} (a motion {:.1}° \
                  apart explained the image within {:.1} %)",
@@ -418,7 +420,6 @@ fn reconstruct_until_pinned(
     let mut shared: Option<Segmentation> = None;
     let mut best = Pass::of(&first_pass, first);
     let mut last = best;
-    let mut last_rival = first_pass.report.ego_rival;
     let mut notes = first_pass.report.notes.clone();
     let mut spent = first_pass.report.timings_ms.clone();
     let mut held = Some(first_pass);
@@ -427,7 +428,7 @@ fn reconstruct_until_pinned(
     {
         notes.push(format!(
             "{}; reconstructed again with preset {}",
-            last.why_finer(last_rival),
+            last.why_finer(),
             preset_name(&finer),
         ));
         if shared.is_none() {
@@ -446,7 +447,6 @@ fn reconstruct_until_pinned(
                 notes.extend_from_slice(&again.report.notes[pair.notes.len()..]);
                 spent.extend_from_slice(&again.report.timings_ms);
                 last = Pass::of(&again, finer);
-                last_rival = again.report.ego_rival;
                 if last.beats(&best) {
                     (best, held) = (last, Some(again));
                 }

@@ -85,11 +85,12 @@ pub struct InitParams {
     pub rival_ego_deg: f64,
     /// The camera's motion is ambiguous when its rival scores within this share of its own
     /// planar score ([`EgoRival::excess`]); with computed flow the pipeline then makes the
-    /// reconstruction again from a finer preset's flow. 0.03: at five seeds, the crowd's rival
-    /// with preset fast (quarter-resolution flow, where the chosen motion was 10.4° off and the
-    /// depth worse than a constant) scored within 1.9–2.7 % at four and 9.3 % at one; with
-    /// preset high every case's rival stays above 5 %, except the creature's 4.5° off at 1.5 %
-    /// (no rival: under 5°); the flag's with preset fast 3.6–3.8 %.
+    /// reconstruction again from a finer preset's flow (0 never does). 0.03: at five seeds, the
+    /// crowd's rival with preset fast (quarter-resolution flow, where the chosen motion was
+    /// 10.4° off and the depth worse than a constant) scored within 1.9–2.7 % at four and
+    /// 11.8 % at one; with preset high every case's rival stays 5 % or more worse, except the
+    /// creature's candidate 4.5° off at 1.5 % (no rival: under 5°); the flag's with preset fast
+    /// 3.6–3.8 %.
     pub ambiguous_ego_excess: f64,
     /// Seed of the RANSAC sampling.
     pub seed: u64,
