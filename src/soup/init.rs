@@ -85,12 +85,13 @@ pub struct InitParams {
     pub rival_ego_deg: f64,
     /// The camera's motion is ambiguous when its rival scores within this share of its own
     /// planar score ([`EgoRival::excess`]); with computed flow the pipeline then makes the
-    /// reconstruction again from a finer preset's flow (0 never does). 0.03: at five seeds, the
-    /// crowd's rival with preset fast (quarter-resolution flow, where the chosen motion was
-    /// 10.4° off and the depth worse than a constant) scored within 1.9–2.7 % at four and
-    /// 11.8 % at one; with preset high every case's rival stays 5 % or more worse, except the
-    /// creature's candidate 4.5° off at 1.5 % (no rival: under 5°); the flag's with preset fast
-    /// 3.6–3.8 %.
+    /// reconstruction again from a finer preset's flow (0 never does). 0.045: with preset fast
+    /// (quarter-resolution flow) the crowd's chosen motion was a compromise 10.4° off, the depth
+    /// worse than a constant, and the true motion, its rival, scored 1.9 % worse at 1500
+    /// superpixels and 3.9 % at 1700; at five seeds its rival was within 1.9–2.7 % at four
+    /// (11.8 % at the fifth, whose pass pins too little anyway). The flag's rival with preset
+    /// fast, 3.6–3.8 %, makes it a pass with preset medium (no change in depth). With preset
+    /// high no case's rival comes within 5 % at the default seeds (the crowd's 5.0 %).
     pub ambiguous_ego_excess: f64,
     /// Seed of the RANSAC sampling.
     pub seed: u64,
@@ -111,7 +112,7 @@ impl Default for InitParams {
             ego_preference_px: 0.3,
             min_parallax_px: 0.05,
             rival_ego_deg: 5.0,
-            ambiguous_ego_excess: 0.03,
+            ambiguous_ego_excess: 0.045,
             seed: 2017,
         }
     }
@@ -1044,7 +1045,10 @@ mod tests {
         assert!((rival.angle_deg - 8.0).abs() < 1e-6, "{rival:?}");
         assert!((rival.excess - 0.02).abs() < 1e-12, "{rival:?}");
         let params = InitParams::default();
-        assert!(rival.is_ambiguous(&params), "2 % is within the default 3 %");
+        assert!(
+            rival.is_ambiguous(&params),
+            "2 % is within the default 4.5 %"
+        );
         let clear = EgoRival {
             excess: 0.05,
             ..rival
