@@ -5,6 +5,7 @@ each evaluation case is compared with the MRE at the defaults. Prints a Markdown
 parameter, the largest change of any case's MRE and the case it happened on.
 
 Usage: scripts/sweep.py CASE_DIR... [--gt-flow] [--only NAME,...] [--seeds N]
+  (NAME as the table prints it, `scales.sigma`, or without its group, `sigma`)
   (needs a release build: cargo build --release --bin soup)
 
 With --seeds N every setting is evaluated at the default seeds and at seeds 1 .. N-1 (see
@@ -110,7 +111,7 @@ def main():
         for name, value in params[group].items():
             if name in SKIP or isinstance(value, bool) or not isinstance(value, (int, float)):
                 continue
-            if only and name not in only:
+            if only and name not in only and f"{group}.{name}" not in only:
                 continue
             worst = (0.0, "")
             values = []
