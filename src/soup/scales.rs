@@ -103,8 +103,9 @@ pub struct ScaleParams {
     /// gap at equal scale are one rigid segment (0.06: a little above the gap noise of fitted
     /// planes; at 0.04 the road at 1500 superpixels split into fragments that went to 0.146.
     /// 0.048–0.072 kept every case within 0.012 of each other until stop 44; since then 0.048
-    /// takes the road to 0.139 at the default seed, +0.066 over five seeds, while 0.072 leaves
-    /// it at 0.047: the margin below the default is small).
+    /// takes the road to 0.139 at the default seed, +0.066 over five seeds (0.040 with
+    /// `static_max` lifted: the cap holds finer fragments of its static world too weakly),
+    /// while 0.072 leaves it at 0.047: the margin below the default is small).
     pub segment_gap: f64,
     /// Colour difference (RGB in [0, 1], Euclidean) at which a pair's weight falls to 1/e:
     /// contacts between pieces of one colour are likelier than across a colour edge.
