@@ -366,9 +366,13 @@ fn the_ego_motion_is_found_among_walkers_and_the_static_world_is_one_body() {
         let mut params = Params::default();
         params.superpixels.count = superpixels;
         let rec = reconstruct_scene(&s, FlowInput::Given(s.flow12.clone()), &params);
-        let truth = Vector3::from(s.camera_motion.t).normalize();
-        let found = rec.unit_soup.hypotheses[0].t;
-        let angle = found.dot(&truth).clamp(-1.0, 1.0).acos().to_degrees();
+        let truth = Motion {
+            r: Matrix3::from_row_slice(s.camera_motion.r.as_flattened()),
+            t: Vector3::from(s.camera_motion.t),
+        };
+        let angle = rec.unit_soup.hypotheses[0]
+            .translation_angle(&truth)
+            .to_degrees();
         assert!(angle < 2.0, "{}: ego-motion {angle:.1}° off", kind.name());
         let m = depth_metrics(&s.depth1, &rec.depth_input).unwrap();
         assert!(m.mre < bound, "{}: MRE {}", kind.name(), m.mre);

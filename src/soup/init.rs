@@ -1004,7 +1004,7 @@ mod tests {
         let samples = patches(&motion, 0.2, &mut Rng::new(3));
         let all: Vec<Correspondence> = samples.iter().flatten().copied().collect();
         let params = InitParams::default();
-        let angle = |m: &Motion| m.t.dot(&motion.t).clamp(-1.0, 1.0).acos().to_degrees();
+        let angle = |m: &Motion| m.translation_angle(&motion).to_degrees();
         let candidates = ego_candidates(&samples, &all, FOCAL, &params, &mut Rng::new(4));
         let &(_, ego) = candidates.first().expect("a motion from 1800 points");
         assert!(angle(&ego) < 0.5, "ego-motion {:.2}° off", angle(&ego));
