@@ -62,9 +62,12 @@
 //!    edge of the view): below a standing thing the floor runs towards the camera, in front of
 //!    it. A weak *static prior* (`static_weight`) ties every
 //!    segment on the ego-motion to the static world's scale instead: the ego-motion explains
-//!    its flow at exactly that scale. Its pull on one segment is capped (`static_max`), the
-//!    floor's excepted: a large segment apart from the world may be a mover the ego-motion
-//!    explains at a wrong depth, which its contacts must be able to place. A *ground prior* (`ground_weight`) charges every piece
+//!    its flow at exactly that scale. Its pull on one segment is capped (`static_max`): a
+//!    large segment apart from the world may be a mover the ego-motion explains at a wrong
+//!    depth, which its contacts must be able to place. Not capped are the floor and the
+//!    fragments that meet the world at equal scale somewhere (a link within `world_gap`,
+//!    directly or through other such fragments): static world that a tight `segment_gap`
+//!    split off, while such a mover meets the world nowhere at the ego-motion's scale. A *ground prior* (`ground_weight`) charges every piece
 //!    outside the static world one broken contact for lying more than σ under its ground. A
 //!    *rest prior* (`rest_weight`) ties every mover whose bottom pixels sit on the ground to
 //!    it, in front as behind: a standing thing touches what it stands on, and its contacts with
@@ -102,10 +105,10 @@ pub struct ScaleParams {
     /// Touching pieces of one motion hypothesis whose planes meet within this median log-depth
     /// gap at equal scale are one rigid segment (0.06: a little above the gap noise of fitted
     /// planes; at 0.04 the road at 1500 superpixels split into fragments that went to 0.146.
-    /// 0.048–0.072 kept every case within 0.012 of each other until stop 44; since then 0.048
-    /// takes the road to 0.139 at the default seed, +0.066 over five seeds (0.040 with
-    /// `static_max` lifted: the cap holds finer fragments of its static world too weakly),
-    /// while 0.072 leaves it at 0.047: the margin below the default is small).
+    /// 0.048–0.072 move no case's mean over five seeds by more than 0.012 (road 0.041 / 0.045
+    /// / 0.045), since fragments of the static world that it splits off are held by the
+    /// static prior without its cap where they meet the world (see `static_max`); capped, the
+    /// road's sky at 0.048 went 2.7–3.7× too near, 0.110 over five seeds).
     pub segment_gap: f64,
     /// Colour difference (RGB in [0, 1], Euclidean) at which a pair's weight falls to 1/e:
     /// contacts between pieces of one colour are likelier than across a colour edge.
@@ -163,7 +166,9 @@ pub struct ScaleParams {
     /// this median log-depth gap at the world's scale: looser than `segment_gap`, since their
     /// depth is well measured and a larger gap is the flow's error near edges (0.2 = 2σ, a
     /// depth jump of 22 %). Not unconditional: a mover whose motion parallels the camera's is
-    /// explained by the ego-motion at a wrong depth and does not meet the world there.
+    /// explained by the ego-motion at a wrong depth and does not meet the world there. A
+    /// segment on the ego-motion that meets the world's segment within this gap somewhere is
+    /// attached to it: the static prior holds it without its cap (see `static_max`).
     pub world_gap: f64,
     /// A piece on the ego-motion that lies more than this (log-depth, by the median of its
     /// pixels) under the static world's ground at the world's scale is not static world: a
@@ -185,7 +190,12 @@ pub struct ScaleParams {
     /// its body resting on the floor (crowd 0.076 over five seeds, 0.064 at most 1.5; 1.2 and
     /// 1.8 within 0.001 of it). The floor is static whatever its size: capped, the crowd's
     /// floor, apart from the wall, followed its walkers (0.08 -> 0.20 with the page's
-    /// settings at 1400 superpixels). Small fragments keep the full 0.05 per piece.
+    /// settings at 1400 superpixels). Small fragments keep the full 0.05 per piece. Nor is a
+    /// segment capped that meets the static world at equal scale across a link within
+    /// `world_gap` (directly or through other such segments): a fragment of the static world
+    /// (the road's sky, split off at a `segment_gap` of 0.048: 191–429 pieces whose links met
+    /// the world within 0.05–0.2, went 2.7–3.7× too near under the cap), while the brick-box
+    /// walker meets it 0.72 and more off, the log of its depth error.
     pub static_max: f64,
     /// A segment on the ego-motion is measured static world, free of the figure prior, when at
     /// least this share of its pieces have the parallax of `world_parallax`. Half: a fragment
@@ -713,6 +723,12 @@ struct Segments {
     /// within σ of the static world's ground at equal scale (see `below`). The static prior
     /// holds such a segment with its full weight (`ScaleParams::static_max` does not cap it).
     grounded: Vec<bool>,
+    /// Per segment, whether it is on the ego-motion and meets the static world's segment at
+    /// equal scale, directly or through other such segments, across a link whose median
+    /// frame-1 gap is below [`ScaleParams::world_gap`] (see `attached_to_world`): a part of
+    /// the static world that `segment_gap` split off. The static prior holds it with its full
+    /// weight, like the floor.
+    attached: Vec<bool>,
     /// Per piece, how far it lies under the static world's ground at equal scales
     /// ([`ground::depth_below_ground`]); `None` for pieces above the horizon, and for every
     /// piece when no ground is in view.
@@ -734,6 +750,40 @@ fn static_world(sizes: &[usize], ego: &[bool]) -> Option<usize> {
     (0..sizes.len())
         .filter(|&g| ego[g])
         .max_by_key(|&g| (sizes[g], std::cmp::Reverse(g)))
+}
+
+/// Per segment, whether it is on the ego-motion (`ego`) and reaches the static world's segment
+/// `world` through links between such segments whose median frame-1 gap at equal scale is
+/// below `gap` (the world itself included). The ego-motion gives every static piece the world's
+/// scale, so a static fragment that a tight `segment_gap` split off still meets the world
+/// nearly there somewhere (the road's sky at 0.048: links within 0.05-0.2), while a mover that
+/// the ego-motion explains at a wrong depth meets it nowhere (the crowd's brick-box walker:
+/// 0.72 and more, the log of its depth error).
+fn attached_to_world(
+    problem: &Problem,
+    segment: &[usize],
+    ego: &[bool],
+    world: Option<usize>,
+    gap: f64,
+) -> Vec<bool> {
+    let mut attached = vec![false; ego.len()];
+    let Some(world) = world else {
+        return attached;
+    };
+    attached[world] = true;
+    let mut grew = true;
+    while grew {
+        grew = false;
+        for l in &problem.links {
+            let (ga, gb) = (segment[l.a], segment[l.b]);
+            if ego[ga] && ego[gb] && attached[ga] != attached[gb] && l.median_c1.abs() < gap {
+                attached[ga] = true;
+                attached[gb] = true;
+                grew = true;
+            }
+        }
+    }
+    attached
 }
 
 /// The static world's ground plane at the unit scale of `world_piece` (the well-measured pieces
@@ -868,6 +918,7 @@ impl Segments {
         let grounded = (0..sizes.len())
             .map(|g| ego[g] && 2 * on_ground[g] >= sizes[g])
             .collect();
+        let attached = attached_to_world(problem, &segment, &ego, world, params.world_gap);
         Segments {
             segment,
             sizes,
@@ -876,6 +927,7 @@ impl Segments {
             measured,
             world,
             grounded,
+            attached,
             below,
             resting,
             floor,
@@ -1430,7 +1482,7 @@ fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64, max
     };
     let pull = |g: usize| {
         let full = weight * sizes[g] as f64;
-        if segments.grounded[g] {
+        if segments.grounded[g] || segments.attached[g] {
             full
         } else {
             full.min(max)
@@ -2086,6 +2138,7 @@ mod tests {
             measured: ego.to_vec(),
             world,
             grounded: vec![false; centre.len()],
+            attached: vec![false; centre.len()],
             below: vec![None; segment.len()],
             resting: vec![Vec::new(); segment.len()],
             floor: false,
@@ -2458,8 +2511,9 @@ mod tests {
         // behind with the weight of two contacts. At 0.05 per piece its static prior would
         // pull like 5 contacts and tie it to the world; at most 1.5 (the default), its contact
         // places it. Below the cap the prior pulls per piece (10 pieces: 0.5, overruled too);
-        // a segment of floor (`grounded`) is held with the full weight.
-        let place = |pieces: usize, params: &ScaleParams, grounded: bool| {
+        // a segment of floor (`grounded`), or one that meets the world at equal scale
+        // (`attached`), is held with the full weight.
+        let place = |pieces: usize, params: &ScaleParams, held: bool| {
             let mut touching = vec![Vec::new(); 200 + pieces];
             touching[0].push(0);
             touching[200].push(0);
@@ -2470,9 +2524,13 @@ mod tests {
             };
             let segment: Vec<usize> = (0..200 + pieces).map(|i| usize::from(i >= 200)).collect();
             let mut segments = segments_of(&segment, &[0.0, 0.0], &[true, true]);
-            segments.grounded[1] = grounded;
-            let u = solve_segments(&problem, &segments, params, None).0;
-            u[1] - u[0]
+            segments.grounded[1] = held;
+            let floor = solve_segments(&problem, &segments, params, None).0;
+            segments.grounded[1] = false;
+            segments.attached[1] = held;
+            let attached = solve_segments(&problem, &segments, params, None).0;
+            assert_eq!(floor, attached);
+            attached[1] - attached[0]
         };
         let defaults = ScaleParams::default();
         for pieces in [10, 100] {
@@ -2485,9 +2543,38 @@ mod tests {
         };
         let tied = place(100, &uncapped, false);
         assert!(tied.abs() < 1e-9, "{tied}");
-        // The floor is not capped.
-        let floor = place(100, &defaults, true);
-        assert!(floor.abs() < 1e-9, "{floor}");
+        // The floor, and a fragment attached to the world, are not capped.
+        let held = place(100, &defaults, true);
+        assert!(held.abs() < 1e-9, "{held}");
+    }
+
+    #[test]
+    fn a_fragment_of_the_world_is_attached_where_it_meets_the_world_at_equal_scale() {
+        // Segments (one piece each): 0 the world; 1 meets it within world_gap (0.15);
+        // 2 meets only 1 (0.18): attached through it; 3 meets the world 0.7 off (a mover the
+        // ego-motion explains at half its depth); 4 meets it exactly but is not on the
+        // ego-motion; 5 meets only 3.
+        let links = vec![
+            link(1, 0, 1.0, 0.15),
+            link(2, 1, 1.0, -0.18),
+            link(3, 0, 1.0, 0.7),
+            link(4, 0, 1.0, 0.0),
+            link(5, 3, 1.0, 0.0),
+        ];
+        let problem = Problem {
+            links,
+            touching: vec![Vec::new(); 6],
+            sigma: 0.1,
+        };
+        let segment: Vec<usize> = (0..6).collect();
+        let ego = [true, true, true, true, false, true];
+        let gap = ScaleParams::default().world_gap;
+        let attached = attached_to_world(&problem, &segment, &ego, Some(0), gap);
+        assert_eq!(attached, [true, true, true, false, false, false]);
+        assert_eq!(
+            attached_to_world(&problem, &segment, &ego, None, gap),
+            [false; 6]
+        );
     }
 
     #[test]
