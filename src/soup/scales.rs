@@ -1470,7 +1470,8 @@ fn add_rest_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64) {
 
 /// The static prior: every segment on the ego-motion but the largest (the static world) is
 /// tied to that one as if by `weight` contacts per piece at equal scale, by at most `max`
-/// contacts unless it is floor (`Segments::grounded`). The ego-motion explains such a
+/// contacts unless it is floor (`Segments::grounded`) or meets the world at equal scale
+/// (`Segments::attached`). The ego-motion explains such a
 /// segment's flow at the world's scale, so it is static unless its contacts say otherwise (a
 /// walker moving parallel to the camera's translation); the floor does not move.
 fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64, max: f64) {
