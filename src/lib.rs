@@ -41,6 +41,7 @@ pub mod soup;
 pub mod superpixels;
 #[allow(clippy::disallowed_methods)]
 pub mod synth;
+mod union_find;
 #[cfg(target_arch = "wasm32")]
 pub mod web;
 

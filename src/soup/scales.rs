@@ -93,6 +93,7 @@ use crate::mrf::trws::{Mrf, TrwsOptions, trws};
 use crate::numeric::{atanh, cos, exp, hypot, ln, min, tanh, weighted_median};
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::{BoundaryEdge, BoundaryGraph};
+use crate::union_find::{find, union};
 
 /// Settings of the scale solve. Each value is scale-free and shared by every scene.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
@@ -669,22 +670,12 @@ pub fn rigid_segments(
     let n = soup.pieces.len();
     let world = world_pieces(soup, inputs, params.world_parallax);
     let mut parent: Vec<usize> = (0..n).collect();
-    fn find(parent: &mut [usize], mut x: usize) -> usize {
-        while parent[x] != x {
-            parent[x] = parent[parent[x]];
-            x = parent[x];
-        }
-        x
-    }
     for l in &problem.links {
         let g = (l.median_c1 + s[l.a] - s[l.b]).abs();
         let meet = g < params.segment_gap || (world[l.a] && world[l.b] && g < params.world_gap);
         let same_side = apart(l.a) == apart(l.b);
         if soup.pieces[l.a].hypothesis == soup.pieces[l.b].hypothesis && meet && same_side {
-            let (ra, rb) = (find(&mut parent, l.a), find(&mut parent, l.b));
-            if ra != rb {
-                parent[ra.max(rb)] = ra.min(rb);
-            }
+            union(&mut parent, l.a, l.b);
         }
     }
     let mut index = vec![usize::MAX; n];
@@ -766,24 +757,20 @@ fn attached_to_world(
     world: Option<usize>,
     gap: f64,
 ) -> Vec<bool> {
-    let mut attached = vec![false; ego.len()];
     let Some(world) = world else {
-        return attached;
+        return vec![false; ego.len()];
     };
-    attached[world] = true;
-    let mut grew = true;
-    while grew {
-        grew = false;
-        for l in &problem.links {
-            let (ga, gb) = (segment[l.a], segment[l.b]);
-            if ego[ga] && ego[gb] && attached[ga] != attached[gb] && l.median_c1.abs() < gap {
-                attached[ga] = true;
-                attached[gb] = true;
-                grew = true;
-            }
+    let mut parent: Vec<usize> = (0..ego.len()).collect();
+    for l in &problem.links {
+        let (ga, gb) = (segment[l.a], segment[l.b]);
+        if ego[ga] && ego[gb] && l.median_c1.abs() < gap {
+            union(&mut parent, ga, gb);
         }
     }
-    attached
+    let root = find(&mut parent, world);
+    (0..ego.len())
+        .map(|g| find(&mut parent, g) == root)
+        .collect()
 }
 
 /// The static world's ground plane at the unit scale of `world_piece` (the well-measured pieces

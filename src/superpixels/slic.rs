@@ -13,6 +13,7 @@ use crate::image::{Frame, to_lab_planes};
 
 use super::{Segment, Superpixels};
 use crate::numeric::ln_f32;
+use crate::union_find::{find, union};
 
 /// SLIC parameters.
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -419,21 +420,6 @@ impl Components {
             size,
         }
     }
-}
-
-/// Root of `i`'s set, halving the path on the way.
-fn find(parent: &mut [usize], mut i: usize) -> usize {
-    while parent[i] != i {
-        parent[i] = parent[parent[i]];
-        i = parent[i];
-    }
-    i
-}
-
-/// Joins the sets of `i` and `j`; the smaller root index becomes the root of both.
-fn union(parent: &mut [usize], i: usize, j: usize) {
-    let (a, b) = (find(parent, i), find(parent, j));
-    parent[a.max(b)] = a.min(b);
 }
 
 /// Per-label pixel lists and statistics.
