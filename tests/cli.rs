@@ -152,12 +152,12 @@ fn reconstruct_writes_the_documented_files() {
     // Without a flow file the flow is computed; the report records its parameters. (Kept at the
     // preset asked for: at this size less than 75 % of the fast flow passes its check, which
     // would have it computed again with the next preset, and no second pass is asked for where
-    // too few scales are pinned or the camera's motion is ambiguous.)
+    // too few scales are pinned, the camera's motion is ambiguous or no ground is found.)
     let computed = dir.join("computed");
     let keep_preset = dir.join("keep-preset.json");
     std::fs::write(
         &keep_preset,
-        r#"{"min_reliable_flow": 0.0, "min_pinned_share": 0.0, "init": {"ambiguous_ego_excess": 0.0}}"#,
+        r#"{"min_reliable_flow": 0.0, "min_pinned_share": 0.0, "finer_without_ground": false, "init": {"ambiguous_ego_excess": 0.0}}"#,
     )
     .unwrap();
     soup_ok(&[

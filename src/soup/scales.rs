@@ -285,6 +285,8 @@ pub struct ScaleReport {
     pub tail_pieces: usize,
     /// Largest / smallest λ.
     pub lambda_ratio: f64,
+    /// Whether the static world's ground plane was found ([`ground::ground_plane`]).
+    pub ground: bool,
 }
 
 /// What the scale solve reads besides the soup, all at the working resolution.
@@ -734,6 +736,8 @@ struct Segments {
     /// ([`ScaleParams::rest_bottom_share`]): a floor that things stand on, so the world below a
     /// mover's bottom edge may be floor in front of it (see `segment_pair_terms`).
     floor: bool,
+    /// Whether the static world's ground plane was found.
+    ground: bool,
 }
 
 /// The static world's segment: the largest on the ego-motion (the earlier one on a tie).
@@ -918,6 +922,7 @@ impl Segments {
             below,
             resting,
             floor,
+            ground: plane.is_some(),
         }
     }
 
@@ -972,6 +977,7 @@ pub fn solve_scales(soup: &mut Soup, inputs: &ScaleInputs, params: &ScaleParams)
         sweeps,
         tail_pieces,
         lambda_ratio: if n > 0 { hi / lo } else { 1.0 },
+        ground: segments.ground,
     }
 }
 
@@ -2130,6 +2136,7 @@ mod tests {
             below: vec![None; segment.len()],
             resting: vec![Vec::new(); segment.len()],
             floor: false,
+            ground: false,
         }
     }
 

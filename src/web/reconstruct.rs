@@ -73,9 +73,10 @@ pub struct RunOptions {
 /// high preset's full-resolution levels raise the tab's peak memory on a 12 MP photo pair from
 /// 370 to 456 MiB (worker memory 80 → 157 MiB), above the page's 400 MiB budget, and the end
 /// to end time from 4.1 to 5.3 s (`node benches/page.mjs`); the parameters panel offers `high`.
-/// A run whose first pass pins too few scales, or leaves the camera's motion ambiguous, makes
-/// a second pass with `high` all the same ([`Params::min_pinned_share`]): an answer worse than a
-/// constant depth costs more than the memory and time, which that pass then takes.
+/// A run whose first pass pins too few scales, leaves the camera's motion ambiguous or finds no
+/// ground makes a second pass with `high` all the same ([`Params::min_pinned_share`],
+/// [`Params::finer_without_ground`]): an answer worse than a constant depth costs more than the
+/// memory and time, which that pass then takes.
 pub const PAGE_FLOW_PRESET: Preset = Preset::Medium;
 
 /// The page's refinement of the kept reconstruction: the members' (2 iterations, 8 particles,
