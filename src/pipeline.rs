@@ -105,7 +105,8 @@ pub struct Params {
     /// nor on the crowd, the table and the road at 1300–1700.)
     pub min_pinned_share: f64,
     /// Whether a reconstruction whose scale solve finds no ground plane is made again from the
-    /// next finer preset's flow (and a finer pass that finds one is kept). At quarter
+    /// next finer preset's flow (and a finer pass that finds one is kept); inert with
+    /// `scales.ground_weight` 0, where no ground is looked for. At quarter
     /// resolution a textured floor's pieces have roughly right depths but wrong slopes: on the
     /// crowd with preset fast at 1400 superpixels 24 of 423 well-measured pieces had a
     /// ground-like plane, no ground was found, and the walkers, with no floor to stand on, went
@@ -165,8 +166,9 @@ pub struct Report {
     /// [`Params::min_pinned_share`]).
     pub timings_ms: Vec<(Stage, f64)>,
     /// Parameters of the computed flow that was kept (a finer preset than the one asked for when
-    /// too little of that passed its check, or when a pass from it pinned too few scales: see
-    /// `notes`); `None` when the flow was given.
+    /// too little of that passed its check, or when a pass from it pinned too few scales, left
+    /// the camera's motion ambiguous or found no ground: see `notes`); `None` when the flow was
+    /// given.
     pub flow: Option<FlowParams>,
     /// Share of the working-resolution pixels whose flow is trusted.
     pub reliable_flow: f64,
@@ -275,10 +277,11 @@ impl Reconstruction {
 /// finish (fraction in [0, 1] within the stage).
 ///
 /// With computed flow, a reconstruction whose scales are pinned on less than
-/// [`Params::min_pinned_share`] of the image, or whose camera motion is ambiguous
-/// ([`InitParams::ambiguous_ego_excess`]), is made again from the flow of the next finer
-/// preset, and the best pass is kept: a finer pass replaces an ambiguous one, and otherwise
-/// the larger pinned share wins (the stages report their progress again from
+/// [`Params::min_pinned_share`] of the image, whose camera motion is ambiguous
+/// ([`InitParams::ambiguous_ego_excess`]) or whose scale solve finds no ground plane
+/// ([`Params::finer_without_ground`]), is made again from the flow of the next finer preset,
+/// and the best pass is kept: a finer pass replaces an ambiguous one and one without a ground
+/// where it finds one, and otherwise the larger pinned share wins (the stages report their progress again from
 /// the flow on; notes say what happened, and the stage times are summed over the passes).
 /// The kept pass is then fused with its members ([`Stage::Ensemble`], last: see
 /// [`crate::soup::ensemble`]), once, and its depth and confidence are made again from the fused
@@ -378,7 +381,10 @@ impl Pass {
             pinned: pinned_share(rec),
             rival,
             ambiguous: rival.is_some_and(|r| r.is_ambiguous(init)),
-            lacks_ground: params.finer_without_ground && !rec.report.scales.ground,
+            // Without the ground's priors (`scales.ground_weight` 0) no ground is looked for.
+            lacks_ground: params.finer_without_ground
+                && params.scales.ground_weight > 0.0
+                && !rec.report.scales.ground,
         }
     }
 
@@ -427,8 +433,9 @@ impl Pass {
 
 /// Passes of [`reconstruct_from`] from the flow of `first`, then of the next finer preset while
 /// the last pass pins less than [`Params::min_pinned_share`] (flow too coarse to show where
-/// movers meet the world leaves their scales to guesses) or its camera motion is ambiguous
-/// (flow too coarse to tell the camera's motion from a compromise with the movers). Returns the
+/// movers meet the world leaves their scales to guesses), its camera motion is ambiguous
+/// (flow too coarse to tell the camera's motion from a compromise with the movers) or it found
+/// no ground ([`Params::finer_without_ground`]: flow too coarse for a floor's slopes). Returns the
 /// best pass ([`Pass::improves_on`]; the earliest on a tie), with the notes of every pass in the
 /// order they ran and its stage times summed over all of them. Only one finished pass is held:
 /// an earlier pass better than the later ones is made again at the end (the pipeline is

@@ -100,7 +100,7 @@ function showProgress(stage, fraction) {
   });
   const total = items.reduce((sum, item) => sum + weight(item.dataset.stage), 0);
   $('progress').value = Math.min(1, (done + weight(stage) * fraction) / total);
-  const again = passes > 1 ? ` (pass ${passes}, finer flow: the last pass pinned too few of the scales)` : '';
+  const again = passes > 1 ? ` (pass ${passes}, finer flow: the last pass pinned too few of the scales, left the camera's motion ambiguous or found no ground)` : '';
   setStatus(`${STAGE_LABELS[stage] ?? stage}${again}…`);
 }
 
