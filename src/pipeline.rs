@@ -381,9 +381,8 @@ impl Pass {
             pinned: pinned_share(rec),
             rival,
             ambiguous: rival.is_some_and(|r| r.is_ambiguous(init)),
-            // Without the ground's priors (`scales.ground_weight` 0) no ground is looked for.
             lacks_ground: params.finer_without_ground
-                && params.scales.ground_weight > 0.0
+                && params.scales.looks_for_ground()
                 && !rec.report.scales.ground,
         }
     }

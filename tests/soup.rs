@@ -260,6 +260,12 @@ fn depth_bits(rec: &Reconstruction) -> Vec<u32> {
 }
 
 /// The reconstruction of a synthetic scene's two frames with `flow` and `params`.
+/// The MRE of one constant depth everywhere on `s` (the floor a reconstruction must beat).
+fn constant_depth_mre(s: &SynthScene) -> f64 {
+    let constant = Grid::filled(s.depth1.width(), s.depth1.height(), 1.0f32);
+    depth_metrics(&s.depth1, &constant).unwrap().mre
+}
+
 fn reconstruct_scene(s: &SynthScene, flow: FlowInput, params: &Params) -> Reconstruction {
     reconstruct(
         &pair_of(&s.frame1, &s.frame2, s.intrinsics),
@@ -336,8 +342,7 @@ fn computed_flow_flag_street_and_creature_beat_a_constant_depth() {
         let s = render(kind, 1024, 436).unwrap();
         let rec = reconstruct_scene(&s, FlowInput::Compute(flow), &params);
         let m = depth_metrics(&s.depth1, &rec.depth_input).unwrap();
-        let constant = Grid::filled(s.depth1.width(), s.depth1.height(), 1.0f32);
-        let floor = depth_metrics(&s.depth1, &constant).unwrap().mre;
+        let floor = constant_depth_mre(&s);
         assert!(
             m.mre < bound && m.mre < floor,
             "{}: MRE {} (bound {bound}, constant depth {floor})",
@@ -398,8 +403,7 @@ fn mre_with_the_page_s_flow(kind: SceneKind) -> (f64, f64) {
     let s = render(kind, 1024, 436).unwrap();
     let rec = reconstruct_scene(&s, FlowInput::Compute(flow), &Params::default());
     let m = depth_metrics(&s.depth1, &rec.depth_input).unwrap();
-    let constant = Grid::filled(s.depth1.width(), s.depth1.height(), 1.0f32);
-    (m.mre, depth_metrics(&s.depth1, &constant).unwrap().mre)
+    (m.mre, constant_depth_mre(&s))
 }
 
 #[test]
@@ -672,8 +676,7 @@ fn an_ambiguous_camera_motion_is_made_again_from_finer_flow() {
     // Its rival flags the motion as ambiguous, and the pass is made again from finer flow.
     let s = render(SceneKind::Crowd, 1024, 436).unwrap();
     let fast = FlowInput::Compute(FlowParams::preset(Preset::Fast));
-    let constant = Grid::filled(s.depth1.width(), s.depth1.height(), 1.0f32);
-    let floor = depth_metrics(&s.depth1, &constant).unwrap().mre;
+    let floor = constant_depth_mre(&s);
     let rec = reconstruct_scene(&s, fast.clone(), &Params::default());
     let notes = &rec.report.notes;
     assert!(
@@ -709,8 +712,7 @@ fn a_pass_without_a_ground_is_made_again_from_finer_flow() {
     // preset medium's flow: 0.122.
     let s = render(SceneKind::Crowd, 1024, 436).unwrap();
     let fast = FlowInput::Compute(FlowParams::preset(Preset::Fast));
-    let constant = Grid::filled(s.depth1.width(), s.depth1.height(), 1.0f32);
-    let floor = depth_metrics(&s.depth1, &constant).unwrap().mre;
+    let floor = constant_depth_mre(&s);
     let mut params = Params::default();
     params.superpixels.count = 1400;
     params.ensemble.members = 1;

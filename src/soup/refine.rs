@@ -229,7 +229,7 @@ impl Problem {
         }
         let is_world = scales::world_pieces(soup, inputs, scale_params.world_parallax);
         let world: Vec<usize> = (0..is_world.len()).filter(|&i| is_world[i]).collect();
-        let ground = (params.ground_weight > 0.0 && scale_params.ground_weight > 0.0)
+        let ground = (params.ground_weight > 0.0 && scale_params.looks_for_ground())
             .then(|| ground::ground_plane(soup, sp, k, &is_world, scale_params.ground_share))
             .flatten();
         Problem {

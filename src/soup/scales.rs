@@ -270,6 +270,15 @@ impl Default for ScaleParams {
     }
 }
 
+impl ScaleParams {
+    /// Whether the static world's ground is looked for at all: a zero `ground_weight` switches
+    /// the ground off (its prior, the split of sunk pieces, the rest prior and the refinement's
+    /// ground cost).
+    pub fn looks_for_ground(&self) -> bool {
+        self.ground_weight > 0.0
+    }
+}
+
 /// What the scale solve did.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct ScaleReport {
@@ -787,7 +796,7 @@ fn world_ground(
     world_piece: &[bool],
     params: &ScaleParams,
 ) -> Option<Vector3<f64>> {
-    (params.ground_weight > 0.0)
+    (params.looks_for_ground())
         .then(|| {
             ground::ground_plane(
                 soup,
