@@ -39,7 +39,7 @@ use super::ground;
 use super::init::sample_correspondences;
 use super::plane::mean_transfer_px;
 use super::scales::{
-    self, RayPoint, ScaleEnergy, ScaleInputs, ScaleParams, TruncatedGaps, pair_weight,
+    self, PointColumn, ScaleEnergy, ScaleInputs, ScaleParams, TruncatedGaps, pair_weight,
     sampled_pairs,
 };
 use super::{Piece, Soup};
@@ -173,21 +173,52 @@ pub struct Problem {
     world: Vec<usize>,
 }
 
-/// Where each of `states` meets each of `rays`, ray by ray: element `r · states.len() + k` is
-/// state k on ray r, all NaN where that point is behind a camera.
-fn ray_columns(states: &[Piece], rays: &[Vector3<f64>]) -> Vec<RayPoint> {
-    let behind = RayPoint {
-        log_depth: f64::NAN,
-        moved: Vector3::repeat(f64::NAN),
-        plane2: Vector3::repeat(f64::NAN),
-    };
-    rays.iter()
-        .flat_map(|r| {
-            states
-                .iter()
-                .map(move |s| scales::ray_point(s, r).unwrap_or(behind))
-        })
-        .collect()
+/// Where each of several states meets each of several rays (see [`scales::RayPoint`]), field by field
+/// and ray by ray: element `r · n + k` of each field is state k on ray r, NaN where that point is
+/// behind a camera.
+struct RayColumns {
+    /// States per ray.
+    n: usize,
+    log_depth: Vec<f64>,
+    moved: [Vec<f64>; 3],
+    plane2: [Vec<f64>; 3],
+}
+
+impl RayColumns {
+    fn new(states: &[Piece], rays: &[Vector3<f64>]) -> Self {
+        let len = states.len() * rays.len();
+        let mut columns = RayColumns {
+            n: states.len(),
+            log_depth: Vec::with_capacity(len),
+            moved: std::array::from_fn(|_| Vec::with_capacity(len)),
+            plane2: std::array::from_fn(|_| Vec::with_capacity(len)),
+        };
+        for ray in rays {
+            for state in states {
+                let nan = Vector3::repeat(f64::NAN);
+                let (log_depth, moved, plane2) = match scales::ray_point(state, ray) {
+                    Some(p) => (p.log_depth, p.moved, p.plane2),
+                    None => (f64::NAN, nan, nan),
+                };
+                columns.log_depth.push(log_depth);
+                for axis in 0..3 {
+                    columns.moved[axis].push(moved[axis]);
+                    columns.plane2[axis].push(plane2[axis]);
+                }
+            }
+        }
+        columns
+    }
+
+    /// The states' points on ray `r`.
+    fn ray(&self, r: usize) -> PointColumn<'_> {
+        let range = r * self.n..(r + 1) * self.n;
+        PointColumn {
+            log_depth: &self.log_depth[range.clone()],
+            moved: self.moved.each_ref().map(|c| &c[range.clone()]),
+            plane2: self.plane2.each_ref().map(|c| &c[range.clone()]),
+        }
+    }
 }
 
 impl Problem {
@@ -314,23 +345,19 @@ impl Problem {
 
     /// The E_cont table of contact `c` between the states `a` of its piece `c.a` and `b` of
     /// `c.b`: element `i · b.len() + j` is E_cont(a[i], b[j]). The loops run over `b` innermost
-    /// on columns without `Option`s (a state behind a camera on a ray is NaN there and pays σ in
-    /// both frames through the comparisons of [`TruncatedGaps::costs`]), so they compile without
-    /// branches: this table is most of the refinement's time.
+    /// on columns of plain numbers ([`RayColumns`]: a state behind a camera on a ray is NaN there
+    /// and pays σ in both frames through the comparisons of [`TruncatedGaps::add_costs`]), so they
+    /// compile to vector instructions without branches: this table is most of the refinement's
+    /// time.
     fn contact_table(&self, c: &Contact, a: &[Piece], b: &[Piece]) -> Vec<f64> {
         let full = 2.0 * self.truncation.sigma();
-        let columns = ray_columns(b, &c.rays);
+        let columns = RayColumns::new(b, &c.rays);
         let n = b.len();
         let mut table = vec![0.0; a.len() * n];
         for (row, state) in table.chunks_exact_mut(n).zip(a) {
-            for ((w, ray), column) in c.weights.iter().zip(&c.rays).zip(columns.chunks_exact(n)) {
+            for (r, (w, ray)) in c.weights.iter().zip(&c.rays).enumerate() {
                 match scales::ray_point(state, ray) {
-                    Some(pa) => {
-                        for (t, pb) in row.iter_mut().zip(column) {
-                            let [g1, g2] = self.truncation.costs(&pa, pb);
-                            *t += w * (g1 + g2);
-                        }
-                    }
+                    Some(pa) => self.truncation.add_costs(*w, &pa, &columns.ray(r), row),
                     None => row.iter_mut().for_each(|t| *t += w * full),
                 }
             }
