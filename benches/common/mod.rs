@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-/// Runs `f` once to warm up, then `runs` times, and returns the sorted wall-clock times in ms.
+/// Runs `f` once to warm up, then `runs` times, and returns the wall-clock times in ms, sorted.
 pub fn time_ms<T>(runs: usize, mut f: impl FnMut() -> T) -> Vec<f64> {
     std::hint::black_box(f());
     let mut times: Vec<f64> = (0..runs.max(1))
@@ -25,13 +25,17 @@ pub fn print_header(title: &str) {
     println!("| --- | --- | --- | --- | --- |");
 }
 
-/// Prints one table row for sorted `times` (from [`time_ms`]).
+/// Prints one table row for `times` (ms, in any order: the fusion row's come from the
+/// pipeline's reports, run by run).
 pub fn print_row(what: &str, size: &str, times: &[f64]) {
-    let median = times[times.len() / 2];
+    let mut sorted = times.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let (Some(min), Some(median)) = (sorted.first(), sorted.get(sorted.len() / 2)) else {
+        println!("| {what} | {size} | 0 | – | – |");
+        return;
+    };
     println!(
-        "| {what} | {size} | {} | {:.1} | {:.1} |",
-        times.len(),
-        times[0],
-        median
+        "| {what} | {size} | {} | {min:.1} | {median:.1} |",
+        sorted.len()
     );
 }
