@@ -173,9 +173,9 @@ pub struct Problem {
     world: Vec<usize>,
 }
 
-/// Where each of several states meets each of several rays (see [`scales::RayPoint`]), field by field
-/// and ray by ray: element `r · n + k` of each field is state k on ray r, NaN where that point is
-/// behind a camera.
+/// Where each of several states meets each of several rays (see [`scales::RayPoint`]), field
+/// by field and ray by ray: element `r · n + k` of each field is state k on ray r, NaN where
+/// that point is behind a camera.
 struct RayColumns {
     /// States per ray.
     n: usize,
@@ -193,9 +193,9 @@ impl RayColumns {
             moved: std::array::from_fn(|_| Vec::with_capacity(len)),
             plane2: std::array::from_fn(|_| Vec::with_capacity(len)),
         };
+        let nan = Vector3::repeat(f64::NAN);
         for ray in rays {
             for state in states {
-                let nan = Vector3::repeat(f64::NAN);
                 let (log_depth, moved, plane2) = match scales::ray_point(state, ray) {
                     Some(p) => (p.log_depth, p.moved, p.plane2),
                     None => (f64::NAN, nan, nan),
@@ -346,9 +346,9 @@ impl Problem {
     /// The E_cont table of contact `c` between the states `a` of its piece `c.a` and `b` of
     /// `c.b`: element `i · b.len() + j` is E_cont(a[i], b[j]). The loops run over `b` innermost
     /// on columns of plain numbers ([`RayColumns`]: a state behind a camera on a ray is NaN there
-    /// and pays σ in both frames through the comparisons of [`TruncatedGaps::add_costs`]), so they
-    /// compile to vector instructions without branches: this table is most of the refinement's
-    /// time.
+    /// and pays σ in both frames through the comparisons of [`TruncatedGaps::add_costs`]), so
+    /// where tanh σ ≤ 0.1 (the default σ = 0.1) they compile to vector instructions without
+    /// branches: this table is most of the refinement's time.
     fn contact_table(&self, c: &Contact, a: &[Piece], b: &[Piece]) -> Vec<f64> {
         let full = 2.0 * self.truncation.sigma();
         let columns = RayColumns::new(b, &c.rays);

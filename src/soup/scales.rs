@@ -1835,80 +1835,93 @@ impl TruncatedGaps {
         self.sigma
     }
 
-    /// The truncated frame-1 and frame-2 gaps of a and b on one ray. Written without branches
-    /// where σ ≤ 0.1 (the series covers |u| < tanh σ, and NaN, a point behind a camera, fails
-    /// every comparison and pays σ): the refinement's tables call this for every pair of
-    /// particles.
+    /// The truncated frame-1 and frame-2 gaps of a and b on one ray (one pair; the
+    /// refinement's tables take a column of pairs at once with [`TruncatedGaps::add_costs`]).
+    /// NaN, a point behind a camera, fails every comparison and pays σ in both frames.
     #[inline]
     pub fn costs(&self, a: &RayPoint, b: &RayPoint) -> [f64; 2] {
         let (p, q) = (b.plane2.dot(&a.moved), a.plane2.dot(&b.moved));
         self.costs_of(a.log_depth - b.log_depth, p, q)
     }
 
-    /// `row[k] += w (g₁ + g₂)` for a against the k-th point of `column`: [`TruncatedGaps::costs`]
-    /// over a column of points stored field by field, which the compiler turns into vector
-    /// instructions where σ ≤ 0.1 (the refinement's contact tables are most of its time).
-    /// Same arithmetic as `costs`, so the same bits.
+    /// `row[k] += w (g₁ + g₂)` for a against the k-th point of `column` (whose slices hold at
+    /// least `row.len()` points): [`TruncatedGaps::costs`] over a column of points stored field
+    /// by field, with the same arithmetic in the same order, so the same bits. Where tanh σ ≤
+    /// 0.1 (the default σ = 0.1) the loop has no branches and the compiler turns it into vector
+    /// instructions; the refinement's contact tables are most of its time.
     #[inline]
     pub fn add_costs(&self, w: f64, a: &RayPoint, column: &PointColumn<'_>, row: &mut [f64]) {
         let n = row.len();
+        debug_assert!(column.log_depth.len() >= n, "a column shorter than its row");
         // Slices of the row's length, so the loops below index them without bounds checks.
         let ld = &column.log_depth[..n];
         let [mx, my, mz] = column.moved.map(|c| &c[..n]);
         let [px, py, pz] = column.plane2.map(|c| &c[..n]);
-        let one = |k: usize| {
+        // The signed frame-1 gap and the frame-2 plane values p, q of a against point k.
+        let gap_and_planes = |k: usize| {
             // The dot products in nalgebra's order: (x + y) + z.
             let p = px[k] * a.moved.x + py[k] * a.moved.y + pz[k] * a.moved.z;
             let q = a.plane2.x * mx[k] + a.plane2.y * my[k] + a.plane2.z * mz[k];
             (a.log_depth - ld[k], p, q)
         };
-        if self.tanh_sigma > SERIES_LIMIT {
+        // Two loops so that σ is tested once, outside them: the series loop has no branches.
+        if self.series_suffices() {
             for (k, t) in row.iter_mut().enumerate() {
-                let (g1, p, q) = one(k);
-                let [g1, g2] = self.costs_of(g1, p, q);
+                let (d1, p, q) = gap_and_planes(k);
+                let [g1, g2] = self.series_costs(d1, p, q);
                 *t += w * (g1 + g2);
             }
         } else {
             for (k, t) in row.iter_mut().enumerate() {
-                let (g1, p, q) = one(k);
-                let [g1, g2] = self.series_costs(g1, p, q);
+                let (d1, p, q) = gap_and_planes(k);
+                let [g1, g2] = self.costs_of(d1, p, q);
                 *t += w * (g1 + g2);
             }
         }
     }
 
-    /// The truncated gaps from the frame-1 gap `g1` and the frame-2 plane values p = m'_bᵀX'_a,
-    /// q = m'_aᵀX'_b.
+    /// Whether the series alone is exact inside the truncation (tanh σ ≤ 0.1).
+    fn series_suffices(&self) -> bool {
+        self.tanh_sigma <= SERIES_LIMIT
+    }
+
+    /// The truncated gaps [min(σ, |d1|), min(σ, |g₂|)] from the signed frame-1 gap `d1` and the
+    /// frame-2 plane values p = m'_bᵀX'_a, q = m'_aᵀX'_b.
     #[inline]
-    fn costs_of(&self, g1: f64, p: f64, q: f64) -> [f64; 2] {
-        if self.tanh_sigma > SERIES_LIMIT {
+    fn costs_of(&self, d1: f64, p: f64, q: f64) -> [f64; 2] {
+        if !self.series_suffices() {
             let u = (p - q) / (p + q);
             let inside = (p > 0.0) & (q > 0.0) & (u.abs() < self.tanh_sigma);
             if inside && u.abs() > SERIES_LIMIT {
-                return [min(self.sigma, g1.abs()), min(self.sigma, atanh(u).abs())];
+                return [min(self.sigma, d1.abs()), min(self.sigma, atanh(u).abs())];
             }
         }
-        self.series_costs(g1, p, q)
+        self.series_costs(d1, p, q)
     }
 
-    /// [`TruncatedGaps::costs_of`] where the series is exact inside the truncation (σ ≤ 0.1 or
-    /// |u| ≤ 0.1): no branches.
+    /// [`TruncatedGaps::costs_of`] where the series is exact inside the truncation (tanh σ ≤ 0.1,
+    /// or |u| ≤ 0.1): no branches.
     #[inline]
-    fn series_costs(&self, g1: f64, p: f64, q: f64) -> [f64; 2] {
+    fn series_costs(&self, d1: f64, p: f64, q: f64) -> [f64; 2] {
         let sigma = self.sigma;
         let u = (p - q) / (p + q);
         let inside = (p > 0.0) & (q > 0.0) & (u.abs() < self.tanh_sigma);
         let series = atanh_series(u).abs();
         let g2 = if inside { series } else { sigma };
-        [min(sigma, g1.abs()), min(sigma, g2)]
+        [min(sigma, d1.abs()), min(sigma, g2)]
     }
 }
 
 /// Points of several states on one ray (see [`RayPoint`]), field by field: element k of each
-/// slice belongs to the k-th state.
+/// slice belongs to the k-th state, NaN in every field where that state's point is behind a
+/// camera.
+#[derive(Clone, Copy, Debug)]
 pub struct PointColumn<'a> {
+    /// [`RayPoint::log_depth`] of each state.
     pub log_depth: &'a [f64],
+    /// x, y and z of [`RayPoint::moved`] of each state.
     pub moved: [&'a [f64]; 3],
+    /// x, y and z of [`RayPoint::plane2`] of each state.
     pub plane2: [&'a [f64]; 3],
 }
 
@@ -2677,6 +2690,63 @@ mod tests {
             (h1 + 2f64.ln()).abs() < 1e-12 && (h2 + 2f64.ln()).abs() < 1e-12,
             "{h1} {h2}"
         );
+    }
+
+    /// `add_costs` over a column gives, bit for bit, the sum of `costs` pair by pair, on both
+    /// of its loops (σ = 0.1: the series alone; 0.15 and 0.3: the library's atanh too), with
+    /// points behind a camera (NaN in every field) among the column's.
+    #[test]
+    fn column_costs_equal_the_pairwise_costs_bit_for_bit() {
+        let mut rng = Rng::new(5);
+        let behind = RayPoint {
+            log_depth: f64::NAN,
+            moved: Vector3::repeat(f64::NAN),
+            plane2: Vector3::repeat(f64::NAN),
+        };
+        let point = |rng: &mut Rng, k: usize| {
+            if k % 5 == 4 {
+                return behind;
+            }
+            let m = Vector3::new(0.05 * rng.normal(), 0.05 * rng.normal(), 0.2);
+            let piece = Piece {
+                r: *nalgebra::Rotation3::new(Vector3::new(0.0, 0.01 * rng.normal(), 0.0)).matrix(),
+                t_hat: Vector3::new(0.2 * rng.normal(), 0.1, -1.0).normalize(),
+                m,
+                lambda: (0.1 * rng.normal()).exp(),
+                hypothesis: 0,
+                degenerate: None,
+            };
+            let ray = Vector3::new(0.1, -0.05, 1.0);
+            ray_point(&piece, &ray).unwrap_or(behind)
+        };
+        let b: Vec<RayPoint> = (0..13).map(|k| point(&mut rng, k)).collect();
+        let field = |f: &dyn Fn(&RayPoint) -> f64| b.iter().map(f).collect::<Vec<f64>>();
+        let log_depth = field(&|p| p.log_depth);
+        let moved: Vec<Vec<f64>> = (0..3).map(|i| field(&|p| p.moved[i])).collect();
+        let plane2: Vec<Vec<f64>> = (0..3).map(|i| field(&|p| p.plane2[i])).collect();
+        let column = PointColumn {
+            log_depth: &log_depth,
+            moved: [&moved[0], &moved[1], &moved[2]],
+            plane2: [&plane2[0], &plane2[1], &plane2[2]],
+        };
+        for sigma in [0.1, 0.15, 0.3] {
+            let gaps = TruncatedGaps::new(sigma);
+            for k in 0..40 {
+                let a = point(&mut rng, k);
+                let w = 0.3;
+                let mut row = vec![0.25; b.len()];
+                gaps.add_costs(w, &a, &column, &mut row);
+                for (got, pb) in row.iter().zip(&b) {
+                    let [g1, g2] = gaps.costs(&a, pb);
+                    let want = 0.25 + w * (g1 + g2);
+                    assert_eq!(
+                        got.to_bits(),
+                        want.to_bits(),
+                        "σ {sigma}: {got} against {want}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]
