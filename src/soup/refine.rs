@@ -39,7 +39,7 @@ use super::ground;
 use super::init::sample_correspondences;
 use super::plane::mean_transfer_px;
 use super::scales::{
-    self, PointColumn, ScaleEnergy, ScaleInputs, ScaleParams, TruncatedGaps, pair_weight,
+    self, PointColumns, ScaleEnergy, ScaleInputs, ScaleParams, TruncatedGaps, pair_weight,
     sampled_pairs,
 };
 use super::{Piece, Soup};
@@ -173,54 +173,6 @@ pub struct Problem {
     world: Vec<usize>,
 }
 
-/// Where each of several states meets each of several rays (see [`scales::RayPoint`]), field
-/// by field and ray by ray: element `r · n + k` of each field is state k on ray r, NaN where
-/// that point is behind a camera.
-struct RayColumns {
-    /// States per ray.
-    n: usize,
-    log_depth: Vec<f64>,
-    moved: [Vec<f64>; 3],
-    plane2: [Vec<f64>; 3],
-}
-
-impl RayColumns {
-    fn new(states: &[Piece], rays: &[Vector3<f64>]) -> Self {
-        let len = states.len() * rays.len();
-        let mut columns = RayColumns {
-            n: states.len(),
-            log_depth: Vec::with_capacity(len),
-            moved: std::array::from_fn(|_| Vec::with_capacity(len)),
-            plane2: std::array::from_fn(|_| Vec::with_capacity(len)),
-        };
-        let nan = Vector3::repeat(f64::NAN);
-        for ray in rays {
-            for state in states {
-                let (log_depth, moved, plane2) = match scales::ray_point(state, ray) {
-                    Some(p) => (p.log_depth, p.moved, p.plane2),
-                    None => (f64::NAN, nan, nan),
-                };
-                columns.log_depth.push(log_depth);
-                for axis in 0..3 {
-                    columns.moved[axis].push(moved[axis]);
-                    columns.plane2[axis].push(plane2[axis]);
-                }
-            }
-        }
-        columns
-    }
-
-    /// The states' points on ray `r`.
-    fn ray(&self, r: usize) -> PointColumn<'_> {
-        let range = r * self.n..(r + 1) * self.n;
-        PointColumn {
-            log_depth: &self.log_depth[range.clone()],
-            moved: self.moved.each_ref().map(|c| &c[range.clone()]),
-            plane2: self.plane2.each_ref().map(|c| &c[range.clone()]),
-        }
-    }
-}
-
 impl Problem {
     /// Builds the problem for `soup` (its pair weights from its current planes and the flow).
     pub fn new(
@@ -345,13 +297,13 @@ impl Problem {
 
     /// The E_cont table of contact `c` between the states `a` of its piece `c.a` and `b` of
     /// `c.b`: element `i · b.len() + j` is E_cont(a[i], b[j]). The loops run over `b` innermost
-    /// on columns of plain numbers ([`RayColumns`]: a state behind a camera on a ray is NaN there
+    /// on columns of plain numbers ([`PointColumns`]: a state behind a camera on a ray is NaN there
     /// and pays σ in both frames through the comparisons of [`TruncatedGaps::add_costs`]), so
     /// where tanh σ ≤ 0.1 (the default σ = 0.1) they compile to vector instructions without
     /// branches: this table is most of the refinement's time.
     fn contact_table(&self, c: &Contact, a: &[Piece], b: &[Piece]) -> Vec<f64> {
         let full = 2.0 * self.truncation.sigma();
-        let columns = RayColumns::new(b, &c.rays);
+        let columns = PointColumns::new(b, &c.rays);
         let n = b.len();
         let mut table = vec![0.0; a.len() * n];
         for (row, state) in table.chunks_exact_mut(n).zip(a) {

@@ -796,7 +796,8 @@ fn world_ground(
     world_piece: &[bool],
     params: &ScaleParams,
 ) -> Option<Vector3<f64>> {
-    (params.looks_for_ground())
+    params
+        .looks_for_ground()
         .then(|| {
             ground::ground_plane(
                 soup,
@@ -1778,6 +1779,16 @@ pub struct RayPoint {
     pub plane2: Vector3<f64>,
 }
 
+impl RayPoint {
+    /// A point behind a camera: NaN in every field, so it fails every comparison of
+    /// [`TruncatedGaps`] and pays σ in both frames.
+    pub const BEHIND: RayPoint = RayPoint {
+        log_depth: f64::NAN,
+        moved: Vector3::new(f64::NAN, f64::NAN, f64::NAN),
+        plane2: Vector3::new(f64::NAN, f64::NAN, f64::NAN),
+    };
+}
+
 /// Where `ray` meets `piece` (see [`RayPoint`]); `None` when the point or the plane is behind
 /// either camera.
 pub fn ray_point(piece: &Piece, ray: &Vector3<f64>) -> Option<RayPoint> {
@@ -1923,6 +1934,51 @@ pub struct PointColumn<'a> {
     pub moved: [&'a [f64]; 3],
     /// x, y and z of [`RayPoint::plane2`] of each state.
     pub plane2: [&'a [f64]; 3],
+}
+
+/// Points of several states on several rays, field by field and ray by ray (the storage of
+/// [`PointColumn`]s): element `r · n + k` of each field is state k on ray r, n states per ray.
+pub struct PointColumns {
+    /// States per ray.
+    n: usize,
+    log_depth: Vec<f64>,
+    moved: [Vec<f64>; 3],
+    plane2: [Vec<f64>; 3],
+}
+
+impl PointColumns {
+    /// Where each of `states` meets each of `rays` ([`ray_point`]; [`RayPoint::BEHIND`] where
+    /// that point is behind a camera).
+    pub fn new(states: &[Piece], rays: &[Vector3<f64>]) -> Self {
+        let len = states.len() * rays.len();
+        let mut columns = PointColumns {
+            n: states.len(),
+            log_depth: Vec::with_capacity(len),
+            moved: std::array::from_fn(|_| Vec::with_capacity(len)),
+            plane2: std::array::from_fn(|_| Vec::with_capacity(len)),
+        };
+        for ray in rays {
+            for state in states {
+                let p = ray_point(state, ray).unwrap_or(RayPoint::BEHIND);
+                columns.log_depth.push(p.log_depth);
+                for axis in 0..3 {
+                    columns.moved[axis].push(p.moved[axis]);
+                    columns.plane2[axis].push(p.plane2[axis]);
+                }
+            }
+        }
+        columns
+    }
+
+    /// The states' points on ray `r`.
+    pub fn ray(&self, r: usize) -> PointColumn<'_> {
+        let range = r * self.n..(r + 1) * self.n;
+        PointColumn {
+            log_depth: &self.log_depth[range.clone()],
+            moved: self.moved.each_ref().map(|c| &c[range.clone()]),
+            plane2: self.plane2.each_ref().map(|c| &c[range.clone()]),
+        }
+    }
 }
 
 /// Where [`atanh_series`] stops being exact to double precision.
@@ -2698,46 +2754,32 @@ mod tests {
     #[test]
     fn column_costs_equal_the_pairwise_costs_bit_for_bit() {
         let mut rng = Rng::new(5);
-        let behind = RayPoint {
-            log_depth: f64::NAN,
-            moved: Vector3::repeat(f64::NAN),
-            plane2: Vector3::repeat(f64::NAN),
-        };
-        let point = |rng: &mut Rng, k: usize| {
-            if k % 5 == 4 {
-                return behind;
-            }
-            let m = Vector3::new(0.05 * rng.normal(), 0.05 * rng.normal(), 0.2);
-            let piece = Piece {
+        // Every fifth plane faces away from the camera: its point is behind it.
+        let piece = |rng: &mut Rng, k: usize| {
+            let facing = if k % 5 == 4 { -0.2 } else { 0.2 };
+            Piece {
                 r: *nalgebra::Rotation3::new(Vector3::new(0.0, 0.01 * rng.normal(), 0.0)).matrix(),
                 t_hat: Vector3::new(0.2 * rng.normal(), 0.1, -1.0).normalize(),
-                m,
+                m: Vector3::new(0.05 * rng.normal(), 0.05 * rng.normal(), facing),
                 lambda: (0.1 * rng.normal()).exp(),
                 hypothesis: 0,
                 degenerate: None,
-            };
-            let ray = Vector3::new(0.1, -0.05, 1.0);
-            ray_point(&piece, &ray).unwrap_or(behind)
+            }
         };
-        let b: Vec<RayPoint> = (0..13).map(|k| point(&mut rng, k)).collect();
-        let field = |f: &dyn Fn(&RayPoint) -> f64| b.iter().map(f).collect::<Vec<f64>>();
-        let log_depth = field(&|p| p.log_depth);
-        let moved: Vec<Vec<f64>> = (0..3).map(|i| field(&|p| p.moved[i])).collect();
-        let plane2: Vec<Vec<f64>> = (0..3).map(|i| field(&|p| p.plane2[i])).collect();
-        let column = PointColumn {
-            log_depth: &log_depth,
-            moved: [&moved[0], &moved[1], &moved[2]],
-            plane2: [&plane2[0], &plane2[1], &plane2[2]],
-        };
+        let ray = Vector3::new(0.1, -0.05, 1.0);
+        let point = |p: &Piece| ray_point(p, &ray).unwrap_or(RayPoint::BEHIND);
+        let b: Vec<Piece> = (0..13).map(|k| piece(&mut rng, k)).collect();
+        let columns = PointColumns::new(&b, &[ray]);
+        assert!(b.iter().any(|p| ray_point(p, &ray).is_none()));
         for sigma in [0.1, 0.15, 0.3] {
             let gaps = TruncatedGaps::new(sigma);
             for k in 0..40 {
-                let a = point(&mut rng, k);
+                let a = point(&piece(&mut rng, k));
                 let w = 0.3;
                 let mut row = vec![0.25; b.len()];
-                gaps.add_costs(w, &a, &column, &mut row);
+                gaps.add_costs(w, &a, &columns.ray(0), &mut row);
                 for (got, pb) in row.iter().zip(&b) {
-                    let [g1, g2] = gaps.costs(&a, pb);
+                    let [g1, g2] = gaps.costs(&a, &point(pb));
                     let want = 0.25 + w * (g1 + g2);
                     assert_eq!(
                         got.to_bits(),
