@@ -177,17 +177,22 @@ pub fn dis_flow(
     let mut flow: Option<(Vec<f32>, Vec<f32>, usize, usize)> = None;
     for (a, b) in from.iter().zip(to).rev() {
         let (w, h) = (a.width, a.height);
-        let (u0, v0) = match &flow {
+        let (u0, v0) = match flow.take() {
             Some((u, v, cw, ch)) => (
-                upsample(u, *cw, *ch, w, h, 2.0),
-                upsample(v, *cw, *ch, w, h, 2.0),
+                upsample(&u, cw, ch, w, h, 2.0),
+                upsample(&v, cw, ch, w, h, 2.0),
             ),
             None => (vec![0.0; w * h], vec![0.0; w * h]),
         };
-        let search = PatchSearch::new(a, b, params);
-        let sparse = search.run(&u0, &v0, params.iterations);
-        let (mut u, mut v) = search.densify(&sparse);
-        refine(a, b, &mut u, &mut v, &params.variational);
+        // The search (its patches, gradients and padded frame 2) and the initial field are
+        // dropped before the refinement, whose arrays are the largest of the level.
+        let (u, v) = {
+            let search = PatchSearch::new(a, b, params);
+            let sparse = search.run(&u0, &v0, params.iterations);
+            search.densify(&sparse)
+        };
+        drop((u0, v0));
+        let (u, v) = refine(a, b, u, v, &params.variational);
         flow = Some((u, v, w, h));
         done += (w * h) as f32;
         progress(done / work);
@@ -286,6 +291,9 @@ fn patch_row(image: &[f32], w: usize, x: usize, y: usize, r: usize) -> &[f32] {
 /// One level's patch grid with everything about frame 1 that Gauss–Newton reuses.
 struct PatchSearch<'a> {
     from: &'a Level,
+    /// Frame 1's gradients on this level ([`Level::gradients`]).
+    gx: Vec<f32>,
+    gy: Vec<f32>,
     to: PaddedImage,
     /// Share of each Gauss–Newton step taken ([`DisParams::step_scale`]).
     step_scale: f32,
@@ -323,13 +331,14 @@ impl<'a> PatchSearch<'a> {
     fn new(from: &'a Level, to: &Level, params: &DisParams) -> Self {
         let xs = origins(from.width, params.patch_stride);
         let ys = origins(from.height, params.patch_stride);
+        let (gx, gy) = from.gradients();
         let mut patches = Vec::with_capacity(xs.len() * ys.len());
         for &y in &ys {
             for &x in &xs {
                 let (mut sx, mut sy, mut sxx, mut sxy, mut syy) = (0.0f32, 0.0, 0.0, 0.0, 0.0);
                 for r in 0..PATCH {
-                    let gx = patch_row(&from.gx, from.width, x, y, r);
-                    let gy = patch_row(&from.gy, from.width, x, y, r);
+                    let gx = patch_row(&gx, from.width, x, y, r);
+                    let gy = patch_row(&gy, from.width, x, y, r);
                     for (&gx, &gy) in gx.iter().zip(gy) {
                         sx += gx;
                         sy += gy;
@@ -353,6 +362,8 @@ impl<'a> PatchSearch<'a> {
         }
         PatchSearch {
             from,
+            gx,
+            gy,
             to: PaddedImage::new(to),
             step_scale: params.step_scale,
             columns: xs.len(),
@@ -475,8 +486,8 @@ impl<'a> PatchSearch<'a> {
             (F4::default(), F4::default(), F4::default(), F4::default());
         for r in 0..PATCH {
             let template = patch_row(&self.from.pixels, w, x0, y0, r);
-            let gx = patch_row(&self.from.gx, w, x0, y0, r);
-            let gy = patch_row(&self.from.gy, w, x0, y0, r);
+            let gx = patch_row(&self.gx, w, x0, y0, r);
+            let gy = patch_row(&self.gy, w, x0, y0, r);
             for c in [0, 4] {
                 let residual = window.sample(r, c) - F4::load(&template[c..]);
                 sum += residual;

@@ -2,8 +2,10 @@
 //!
 //! Level 0 is the input; level l + 1 halves level l by 2 × 2 box averaging (sizes rounded down),
 //! so pixel centre x of level l + 1 sits at 2x + 0.5 in level l. Every level keeps its
-//! intensities (grey levels in [0, 255]) and their gradients, computed once and shared by both
-//! flow directions. Images are flat row-major `Vec<f32>`s: the inner loops index them directly.
+//! intensities (grey levels in [0, 255]), shared by both flow directions; their gradients are
+//! computed by [`Level::gradients`] when a patch search needs them (each level is searched from
+//! once, in one direction) and dropped with it, which keeps them out of the flow's peak memory.
+//! Images are flat row-major `Vec<f32>`s: the inner loops index them directly.
 
 use crate::grid::Grid;
 
@@ -14,23 +16,22 @@ pub struct Level {
     pub height: usize,
     /// Grey levels in [0, 255], row-major.
     pub pixels: Vec<f32>,
-    /// ∂I/∂x in grey levels per pixel of this level (3 × 3 Sobel divided by 8), row-major.
-    pub gx: Vec<f32>,
-    /// ∂I/∂y, likewise.
-    pub gy: Vec<f32>,
 }
 
 impl Level {
-    /// A level holding `pixels` (`width × height`, row-major) with its gradients.
+    /// A level holding `pixels` (`width × height`, row-major).
     pub fn new(width: usize, height: usize, pixels: Vec<f32>) -> Self {
-        let (gx, gy) = sobel(&pixels, width, height);
         Level {
             width,
             height,
             pixels,
-            gx,
-            gy,
         }
+    }
+
+    /// (∂I/∂x, ∂I/∂y) in grey levels per pixel of this level, row-major: 3 × 3 Sobel divided
+    /// by 8 (a unit ramp has gradient 1), borders replicated.
+    pub fn gradients(&self) -> (Vec<f32>, Vec<f32>) {
+        sobel(&self.pixels, self.width, self.height)
     }
 
     /// Bilinear sample at (x, y) with pixel centres at integers, clamped to the image
@@ -166,8 +167,9 @@ mod tests {
                 .map(|i| (i % 6) as f32 * 3.0 + (i / 6) as f32)
                 .collect(),
         );
-        assert!((level.gx[2 * 6 + 3] - 3.0).abs() < 1e-5);
-        assert!((level.gy[2 * 6 + 3] - 1.0).abs() < 1e-5);
+        let (gx, gy) = level.gradients();
+        assert!((gx[2 * 6 + 3] - 3.0).abs() < 1e-5);
+        assert!((gy[2 * 6 + 3] - 1.0).abs() < 1e-5);
     }
 
     #[test]

@@ -80,28 +80,31 @@ const ZETA_SQ: f32 = 0.01;
 /// ε²: smooths the robust penalty Ψ near zero.
 const EPSILON_SQ: f32 = 1e-6;
 
-/// Refines the flow (u, v) from `from` to `to` (one pyramid level each) in place.
-pub fn refine(from: &Level, to: &Level, u: &mut [f32], v: &mut [f32], params: &VariationalParams) {
+/// The flow (u, v) from `from` to `to` (one pyramid level each, row-major) refined. The arrays
+/// are taken by value: the refinement holds its own padded copy of the flow, so the input's
+/// memory is released while its larger arrays are alive.
+pub fn refine(
+    from: &Level,
+    to: &Level,
+    u: Vec<f32>,
+    v: Vec<f32>,
+    params: &VariationalParams,
+) -> (Vec<f32>, Vec<f32>) {
     let (w, h) = (from.width, from.height);
     if params.iterations == 0 || w < 2 || h < 2 {
-        return;
+        return (u, v);
     }
-    let terms = data_terms(from, to, u, v);
+    let derivatives = Derivatives::new(from, to, &u, &v);
     let mut system = System::new(w, h, u, v);
     for _ in 0..params.iterations {
-        system.linearise(&terms, params);
+        system.linearise(&derivatives, params);
         for _ in 0..params.sor_iterations {
             system.sor_half_sweep(params.omega, 0);
             system.sor_half_sweep(params.omega, 1);
         }
     }
-    for y in 0..h {
-        let row = &system.increment[(y + 1) * (w + 2) + 1..][..w];
-        for (x, d) in row.iter().enumerate() {
-            u[y * w + x] += d[0];
-            v[y * w + x] += d[1];
-        }
-    }
+    drop(derivatives);
+    system.into_refined_flow()
 }
 
 /// The linearised constancy equations of one pixel, each already divided by its normalisation
@@ -109,73 +112,157 @@ pub fn refine(from: &Level, to: &Level, u: &mut [f32], v: &mut [f32], params: &V
 /// y-gradient `[6]·du + [7]·dv + [8]`.
 type Constancy = [f32; 9];
 
-/// The constancy equations of every pixel at the current flow, in the padded layout (zero on
-/// the border and where (u, v) leaves the image): `to` warped by (u, v), derivatives of the mean
-/// of `from` and the warped image and of their difference (central differences, one-sided at
-/// borders), normalised.
-fn data_terms(from: &Level, to: &Level, u: &[f32], v: &[f32]) -> Vec<Constancy> {
-    let (w, h) = (from.width, from.height);
-    let mut mean = Vec::with_capacity(w * h);
-    let mut iz = Vec::with_capacity(w * h);
-    let mut inside = Vec::with_capacity(w * h);
-    let (xmax, ymax) = ((w - 1) as f32, (h - 1) as f32);
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            let (tx, ty) = (x as f32 + u[i], y as f32 + v[i]);
-            let warped = sample_clamped(&to.pixels, w, h, tx, ty);
-            mean.push(0.5 * (from.pixels[i] + warped));
-            iz.push(warped - from.pixels[i]);
-            inside.push((0.0..=xmax).contains(&tx) && (0.0..=ymax).contains(&ty));
+/// What the constancy equations are made of at the base flow: `to` warped by (u, v), the first
+/// derivatives of the mean of `from` and the warped image, and their difference (central
+/// differences, one-sided at borders). The equations themselves ([`Derivatives::equations`])
+/// are made a row at a time when each fixed-point iteration needs them: holding them for the
+/// whole level would take 36 bytes per pixel, these arrays take 13.
+struct Derivatives {
+    w: usize,
+    h: usize,
+    /// ∂/∂x and ∂/∂y of the mean of `from` and the warped `to`.
+    ix: Vec<f32>,
+    iy: Vec<f32>,
+    /// The warped `to` minus `from`.
+    iz: Vec<f32>,
+    /// Whether (u, v) carries the pixel inside `to` (elsewhere there is no data term).
+    inside: Vec<bool>,
+}
+
+/// One row of each second derivative, reused from row to row by [`Derivatives::equations`]
+/// (∂ₓ of iy is not needed: ixy is ∂_y of ix).
+struct SecondDerivativeRows {
+    ixz: Vec<f32>,
+    iyz: Vec<f32>,
+    ixx: Vec<f32>,
+    ixy: Vec<f32>,
+    unused: Vec<f32>,
+    iyy: Vec<f32>,
+}
+
+impl Derivatives {
+    /// The derivatives at the flow (u, v) from `from` to `to` (row-major, `w × h`, w, h ≥ 2).
+    fn new(from: &Level, to: &Level, u: &[f32], v: &[f32]) -> Self {
+        let (w, h) = (from.width, from.height);
+        let mut mean = Vec::with_capacity(w * h);
+        let mut iz = Vec::with_capacity(w * h);
+        let mut inside = Vec::with_capacity(w * h);
+        let (xmax, ymax) = ((w - 1) as f32, (h - 1) as f32);
+        for y in 0..h {
+            for x in 0..w {
+                let i = y * w + x;
+                let (tx, ty) = (x as f32 + u[i], y as f32 + v[i]);
+                let warped = sample_clamped(&to.pixels, w, h, tx, ty);
+                mean.push(0.5 * (from.pixels[i] + warped));
+                iz.push(warped - from.pixels[i]);
+                inside.push((0.0..=xmax).contains(&tx) && (0.0..=ymax).contains(&ty));
+            }
+        }
+        let (ix, iy) = central_differences(&mean, w, h);
+        Derivatives {
+            w,
+            h,
+            ix,
+            iy,
+            iz,
+            inside,
         }
     }
-    let (ix, iy) = central_differences(&mean, w, h);
-    let (ixz, iyz) = central_differences(&iz, w, h);
-    let (ixx, ixy) = central_differences(&ix, w, h);
-    let (_, iyy) = central_differences(&iy, w, h);
-    let mut terms = vec![[0.0; 9]; (w + 2) * (h + 2)];
-    for y in 0..h {
-        for x in 0..w {
-            let i = y * w + x;
-            if !inside[i] {
-                // Frame 2 holds nothing to compare with: smoothness alone decides.
+
+    /// Scratch rows for [`Derivatives::equations`].
+    fn scratch(&self) -> SecondDerivativeRows {
+        let row = || vec![0.0; self.w];
+        SecondDerivativeRows {
+            ixz: row(),
+            iyz: row(),
+            ixx: row(),
+            ixy: row(),
+            unused: row(),
+            iyy: row(),
+        }
+    }
+
+    /// The constancy equations of row `y` into `out[x]` for pixel x (`w` entries): zero where
+    /// the flow leaves the image (frame 2 holds nothing to compare with, so smoothness alone
+    /// decides).
+    fn equations(&self, y: usize, rows: &mut SecondDerivativeRows, out: &mut [Constancy]) {
+        let (w, h) = (self.w, self.h);
+        let SecondDerivativeRows {
+            ixz,
+            iyz,
+            ixx,
+            ixy,
+            unused,
+            iyy,
+        } = rows;
+        central_differences_row(&self.iz, w, h, y, ixz, iyz);
+        central_differences_row(&self.ix, w, h, y, ixx, ixy);
+        central_differences_row(&self.iy, w, h, y, unused, iyy);
+        let at = y * w;
+        let (ix, iy, iz) = (
+            &self.ix[at..][..w],
+            &self.iy[at..][..w],
+            &self.iz[at..][..w],
+        );
+        for (x, (out, &inside)) in out[..w].iter_mut().zip(&self.inside[at..][..w]).enumerate() {
+            if !inside {
+                *out = [0.0; 9];
                 continue;
             }
-            let b = 1.0 / (ix[i] * ix[i] + iy[i] * iy[i] + ZETA_SQ).sqrt();
-            let gx = 1.0 / (ixx[i] * ixx[i] + ixy[i] * ixy[i] + ZETA_SQ).sqrt();
-            let gy = 1.0 / (iyy[i] * iyy[i] + ixy[i] * ixy[i] + ZETA_SQ).sqrt();
-            terms[(y + 1) * (w + 2) + x + 1] = [
-                ix[i] * b,
-                iy[i] * b,
-                iz[i] * b,
-                ixx[i] * gx,
-                ixy[i] * gx,
-                ixz[i] * gx,
-                ixy[i] * gy,
-                iyy[i] * gy,
-                iyz[i] * gy,
+            let b = 1.0 / (ix[x] * ix[x] + iy[x] * iy[x] + ZETA_SQ).sqrt();
+            let gx = 1.0 / (ixx[x] * ixx[x] + ixy[x] * ixy[x] + ZETA_SQ).sqrt();
+            let gy = 1.0 / (iyy[x] * iyy[x] + ixy[x] * ixy[x] + ZETA_SQ).sqrt();
+            *out = [
+                ix[x] * b,
+                iy[x] * b,
+                iz[x] * b,
+                ixx[x] * gx,
+                ixy[x] * gx,
+                ixz[x] * gx,
+                ixy[x] * gy,
+                iyy[x] * gy,
+                iyz[x] * gy,
             ];
         }
     }
-    terms
 }
 
 /// (∂/∂x, ∂/∂y) of a `w × h` field (w, h ≥ 2) by central differences, one-sided at the
 /// borders.
 fn central_differences(f: &[f32], w: usize, h: usize) -> (Vec<f32>, Vec<f32>) {
-    let mut dx = Vec::with_capacity(w * h);
-    let mut dy = Vec::with_capacity(w * h);
-    for y in 0..h {
-        let row = &f[y * w..][..w];
-        dx.push(row[1] - row[0]);
-        dx.extend(row.windows(3).map(|t| 0.5 * (t[2] - t[0])));
-        dx.push(row[w - 1] - row[w - 2]);
-        let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
-        let scale = 1.0 / (down - up) as f32;
-        let (above, below) = (&f[up * w..][..w], &f[down * w..][..w]);
-        dy.extend(above.iter().zip(below).map(|(a, b)| (b - a) * scale));
+    let mut dx = vec![0.0; w * h];
+    let mut dy = vec![0.0; w * h];
+    for (y, (dx, dy)) in dx
+        .chunks_exact_mut(w)
+        .zip(dy.chunks_exact_mut(w))
+        .enumerate()
+    {
+        central_differences_row(f, w, h, y, dx, dy);
     }
     (dx, dy)
+}
+
+/// Row `y` of [`central_differences`] of `f` into `dx` and `dy` (`w` values each).
+fn central_differences_row(
+    f: &[f32],
+    w: usize,
+    h: usize,
+    y: usize,
+    dx: &mut [f32],
+    dy: &mut [f32],
+) {
+    let row = &f[y * w..][..w];
+    dx[0] = row[1] - row[0];
+    for (d, t) in dx[1..w - 1].iter_mut().zip(row.windows(3)) {
+        *d = 0.5 * (t[2] - t[0]);
+    }
+    dx[w - 1] = row[w - 1] - row[w - 2];
+    let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
+    let scale = 1.0 / (down - up) as f32;
+    let (above, below) = (&f[up * w..][..w], &f[down * w..][..w]);
+    for ((d, a), b) in dy.iter_mut().zip(above).zip(below) {
+        *d = (b - a) * scale;
+    }
 }
 
 /// One pixel's row of the linear system of a fixed-point iteration:
@@ -209,7 +296,9 @@ struct System {
 }
 
 impl System {
-    fn new(w: usize, h: usize, u: &[f32], v: &[f32]) -> Self {
+    /// The system around the base flow (u, v) (`w × h`, row-major), zero increments; (u, v) is
+    /// released once copied, before the increments and coefficients are allocated.
+    fn new(w: usize, h: usize, u: Vec<f32>, v: Vec<f32>) -> Self {
         let stride = w + 2;
         let mut flow = vec![[0.0; 2]; stride * (h + 2)];
         for py in 0..h + 2 {
@@ -219,6 +308,7 @@ impl System {
                 flow[py * stride + px] = [u[i], v[i]];
             }
         }
+        drop((u, v));
         System {
             w,
             h,
@@ -228,11 +318,35 @@ impl System {
         }
     }
 
+    /// The base flow plus the increments, as (u, v) row-major without the padding; the
+    /// coefficients are released first.
+    fn into_refined_flow(self) -> (Vec<f32>, Vec<f32>) {
+        let System {
+            w,
+            h,
+            flow,
+            increment,
+            coefficients,
+        } = self;
+        drop(coefficients);
+        let stride = w + 2;
+        let (mut u, mut v) = (Vec::with_capacity(w * h), Vec::with_capacity(w * h));
+        for y in 1..=h {
+            let base = &flow[y * stride + 1..][..w];
+            let step = &increment[y * stride + 1..][..w];
+            for (f, d) in base.iter().zip(step) {
+                u.push(f[0] + d[0]);
+                v.push(f[1] + d[1]);
+            }
+        }
+        (u, v)
+    }
+
     /// Freezes the robust weights at the current increments and builds every pixel's
     /// [`Coefficients`]: smoothness weight α/2 · Ψ'(|∇(u + du)|² + |∇(v + dv)|²) from forward
     /// differences (given to the pixel's right and lower edges), the data terms weighted by
     /// Ψ' of their residuals, and the base flow's smoothness pull.
-    fn linearise(&mut self, terms: &[Constancy], params: &VariationalParams) {
+    fn linearise(&mut self, derivatives: &Derivatives, params: &VariationalParams) {
         let (half_alpha, half_delta, half_gamma) =
             (0.5 * params.alpha, 0.5 * params.delta, 0.5 * params.gamma);
         let (w, h) = (self.w, self.h);
@@ -243,6 +357,8 @@ impl System {
             coefficients,
             ..
         } = self;
+        let mut second = derivatives.scratch();
+        let mut equations = vec![[0.0; 9]; stride];
         for y in 1..=h {
             let row = y * stride;
             let (flow_up, flow_mid, flow_down) = (
@@ -254,7 +370,8 @@ impl System {
                 &increment[row..][..stride],
                 &increment[row + stride..][..stride],
             );
-            let terms = &terms[row..][..stride];
+            // This row's equations, indexed like the padded row (column 0 unused).
+            derivatives.equations(y - 1, &mut second, &mut equations[1..]);
             let (above, rest) = coefficients.split_at_mut(row);
             let (coefficients_up, coefficients_mid) = (&above[row - stride..], &mut rest[..stride]);
             // Weight of the edge to the left neighbour: the previous pixel's right edge.
@@ -281,7 +398,7 @@ impl System {
                 let wd = if has_down { psi } else { 0.0 };
                 let wu = coefficients_up[x].wy;
 
-                let t = &terms[x];
+                let t = &equations[x];
                 let [du, dv] = increment_mid[x];
                 let r = t[2] + t[0] * du + t[1] * dv;
                 let wb = half_delta / (r * r + EPSILON_SQ).sqrt();
@@ -371,15 +488,15 @@ mod tests {
         let (a, b) = (texture(w, h, 0.0), texture(w, h, 1.0));
         let mut rng = crate::rng::Rng::new(7);
         let mut noise = || 0.8 * (rng.uniform() as f32 - 0.5);
-        let mut u: Vec<f32> = (0..w * h).map(|_| 1.0 + noise()).collect();
-        let mut v: Vec<f32> = (0..w * h).map(|_| noise()).collect();
+        let u: Vec<f32> = (0..w * h).map(|_| 1.0 + noise()).collect();
+        let v: Vec<f32> = (0..w * h).map(|_| noise()).collect();
         let mean_error = |u: &[f32], v: &[f32]| {
             let inner = (4..h - 4).flat_map(|y| (4..w - 4).map(move |x| y * w + x));
             let n = ((w - 8) * (h - 8)) as f32;
             inner.map(|i| (u[i] - 1.0).hypot(v[i])).sum::<f32>() / n
         };
         let before = mean_error(&u, &v);
-        refine(&a, &b, &mut u, &mut v, &VariationalParams::default());
+        let (u, v) = refine(&a, &b, u, v, &VariationalParams::default());
         let after = mean_error(&u, &v);
         assert!(
             before > 0.2 && after < 0.05,
@@ -390,18 +507,12 @@ mod tests {
     #[test]
     fn identical_images_keep_zero_flow_and_flat_ones_stay_finite() {
         let a = texture(20, 16, 0.0);
-        let (mut u, mut v) = (vec![0.0; 320], vec![0.0; 320]);
-        refine(&a, &a, &mut u, &mut v, &VariationalParams::default());
+        let zero = || vec![0.0; 320];
+        let (u, v) = refine(&a, &a, zero(), zero(), &VariationalParams::default());
         assert!(u.iter().chain(&v).all(|&f| f == 0.0));
         let flat = Level::new(20, 16, vec![7.0; 320]);
         let bright = Level::new(20, 16, vec![90.0; 320]);
-        refine(
-            &flat,
-            &bright,
-            &mut u,
-            &mut v,
-            &VariationalParams::default(),
-        );
+        let (u, v) = refine(&flat, &bright, u, v, &VariationalParams::default());
         assert!(u.iter().chain(&v).all(|&f| f == 0.0));
     }
 
