@@ -233,17 +233,7 @@ pub fn refine_motion(points: &[Correspondence], start: &Motion, iterations: usiz
     }
     let residuals = |m: &Motion| -> Vec<f64> {
         let e = m.essential();
-        points
-            .iter()
-            .map(|c| {
-                let d = sampson(&e, c).sqrt();
-                if d.is_finite() {
-                    d * c.x2.dot(&(e * c.x1)).signum()
-                } else {
-                    0.0
-                }
-            })
-            .collect()
+        points.iter().map(|c| signed_sampson(&e, c)).collect()
     };
     let cost = |r: &[f64]| r.iter().map(|v| v * v).sum::<f64>();
     let mut current = *start;
@@ -251,25 +241,8 @@ pub fn refine_motion(points: &[Correspondence], start: &Motion, iterations: usiz
     let mut c0 = cost(&r0);
     let mut damping = 1e-3;
     for _ in 0..iterations {
-        // Numerical Jacobian over the 5 parameters.
+        let (jtj, jtr) = normal_equations(points, &current, &r0);
         let basis = tangent_basis(&current.t);
-        let step = 1e-7;
-        let jac: Vec<Vec<f64>> = (0..5)
-            .map(|k| {
-                let mut d = [0.0; 5];
-                d[k] = step;
-                let r = residuals(&apply(&current, &d, &basis));
-                r.iter().zip(&r0).map(|(a, b)| (a - b) / step).collect()
-            })
-            .collect();
-        let mut jtj = nalgebra::SMatrix::<f64, 5, 5>::zeros();
-        let mut jtr = nalgebra::SVector::<f64, 5>::zeros();
-        for a in 0..5 {
-            for b in 0..5 {
-                jtj[(a, b)] = jac[a].iter().zip(&jac[b]).map(|(x, y)| x * y).sum();
-            }
-            jtr[a] = jac[a].iter().zip(&r0).map(|(x, y)| x * y).sum();
-        }
         let mut improved = false;
         for _ in 0..6 {
             let mut m = jtj;
@@ -298,6 +271,40 @@ pub fn refine_motion(points: &[Correspondence], start: &Motion, iterations: usiz
     current
 }
 
+/// JᵀJ and Jᵀr of the signed Sampson residuals `r0` of `points` at `motion`, with J the
+/// numerical Jacobian over [`apply`]'s 5 parameters (forward differences of 10⁻⁷), summed point
+/// by point.
+fn normal_equations(
+    points: &[Correspondence],
+    motion: &Motion,
+    r0: &[f64],
+) -> (nalgebra::SMatrix<f64, 5, 5>, nalgebra::SVector<f64, 5>) {
+    const STEP: f64 = 1e-7;
+    let basis = tangent_basis(&motion.t);
+    let moved: [Matrix3<f64>; 5] = std::array::from_fn(|k| {
+        let mut d = [0.0; 5];
+        d[k] = STEP;
+        apply(motion, &d, &basis).essential()
+    });
+    let mut jtj = nalgebra::SMatrix::<f64, 5, 5>::zeros();
+    let mut jtr = nalgebra::SVector::<f64, 5>::zeros();
+    for (c, &r) in points.iter().zip(r0) {
+        let j: [f64; 5] = std::array::from_fn(|k| (signed_sampson(&moved[k], c) - r) / STEP);
+        for a in 0..5 {
+            for b in a..5 {
+                jtj[(a, b)] += j[a] * j[b];
+            }
+            jtr[a] += j[a] * r;
+        }
+    }
+    for a in 0..5 {
+        for b in 0..a {
+            jtj[(a, b)] = jtj[(b, a)];
+        }
+    }
+    (jtj, jtr)
+}
+
 /// Two unit vectors orthogonal to `t` (and to each other).
 fn tangent_basis(t: &Vector3<f64>) -> [Vector3<f64>; 2] {
     let t = t.normalize();
@@ -322,15 +329,39 @@ fn apply(m: &Motion, d: &[f64; 5], basis: &[Vector3<f64>; 2]) -> Motion {
 /// Sampson distance² of a correspondence to the epipolar constraint of `e`, in normalised units
 /// (multiply by f² for pixels²).
 pub fn sampson(e: &Matrix3<f64>, c: &Correspondence) -> f64 {
-    let ex = e * c.x1;
-    let etx = e.transpose() * c.x2;
-    let num = c.x2.dot(&ex);
-    let den = ex.x * ex.x + ex.y * ex.y + etx.x * etx.x + etx.y * etx.y;
+    let (num, den) = sampson_parts(e, c);
+    sampson_ratio(num, den)
+}
+
+/// The signed Sampson distance: √[`sampson`] with the sign of x̄₂ᵀ E x̄₁, 0 where it is not
+/// finite. [`refine_motion`]'s residual.
+fn signed_sampson(e: &Matrix3<f64>, c: &Correspondence) -> f64 {
+    let (num, den) = sampson_parts(e, c);
+    let d = sampson_ratio(num, den).sqrt();
+    if d.is_finite() { d * num.signum() } else { 0.0 }
+}
+
+/// num² / den, infinite where den ≤ 0.
+#[inline]
+fn sampson_ratio(num: f64, den: f64) -> f64 {
     if den <= 0.0 {
         f64::INFINITY
     } else {
         num * num / den
     }
+}
+
+/// The Sampson error's numerator x̄₂ᵀ E x̄₁ and denominator (the squared first two coordinates
+/// of E x̄₁ and Eᵀ x̄₂).
+#[inline]
+fn sampson_parts(e: &Matrix3<f64>, c: &Correspondence) -> (f64, f64) {
+    let ex = e * c.x1;
+    let etx = e.transpose() * c.x2;
+    let num = c.x2.dot(&ex);
+    (
+        num,
+        ex.x * ex.x + ex.y * ex.y + etx.x * etx.x + etx.y * etx.y,
+    )
 }
 
 #[cfg(test)]
