@@ -3,12 +3,18 @@
 //! street scene. Run with `cargo bench --bench flow`; `cargo bench --bench flow -- medium` times
 //! only the named presets, `-- edges` only the last row: the motion-edge sharpening alone at
 //! full resolution, both directions (part of the high row; medium sharpens at half resolution,
-//! fast at a quarter).
+//! fast at a quarter). A second table gives each preset's peak heap memory (bytes the flow
+//! allocates at once at its peak, counted by the bench's allocator), in bytes per pixel: what
+//! the page's worker needs on top of the frames when it computes the flow.
 
 mod common;
 
+#[global_allocator]
+static HEAP: common::PeakHeap = common::PeakHeap::new();
+
 use superpixel_soup::flow::edges::sharpen_motion_edges;
 use superpixel_soup::flow::{EdgeParams, FlowParams, Preset, compute_flow};
+use superpixel_soup::image::Frame;
 use superpixel_soup::synth::{SceneKind, render};
 
 fn main() {
@@ -37,9 +43,14 @@ fn main() {
             &times,
         );
     }
-    if !wanted.is_empty() && !wanted.iter().any(|w| w == "edges") {
-        return;
+    if wanted.is_empty() || wanted.iter().any(|w| w == "edges") {
+        time_edges(&scene.frame1, &scene.frame2);
     }
+    print_peak_memory(&scene.frame1, &scene.frame2, &wanted);
+}
+
+/// The row of the motion-edge sharpening alone, both directions, at full resolution.
+fn time_edges(frame1: &Frame, frame2: &Frame) {
     let unsharpened = FlowParams {
         edges: EdgeParams {
             band: 0,
@@ -47,18 +58,41 @@ fn main() {
         },
         ..FlowParams::preset(Preset::High)
     };
-    let Ok(pair) = compute_flow(&scene.frame1, &scene.frame2, &unsharpened, &mut |_| {}) else {
+    let Ok(pair) = compute_flow(frame1, frame2, &unsharpened, &mut |_| {}) else {
         eprintln!("cannot compute the street's flow");
         return;
     };
     let edges = EdgeParams::default();
     let times = common::time_ms(5, || {
-        sharpen_motion_edges(&pair.forward, &scene.frame1, &edges)?;
-        sharpen_motion_edges(&pair.backward, &scene.frame2, &edges)
+        sharpen_motion_edges(&pair.forward, frame1, &edges)?;
+        sharpen_motion_edges(&pair.backward, frame2, &edges)
     });
     common::print_row(
         "motion-edge sharpening at full resolution, both directions (in the high row)",
         "1024×436",
         &times,
     );
+}
+
+/// The table of each wanted preset's peak heap memory during one flow computation.
+fn print_peak_memory(frame1: &Frame, frame2: &Frame, wanted: &[String]) {
+    println!("\nPeak heap memory of the flow (one run; the frames themselves not counted)\n");
+    println!("| what | size | peak MiB | bytes per pixel |");
+    println!("| --- | --- | --- | --- |");
+    let (width, height) = frame1.size();
+    let pixels = (width * height) as f64;
+    for preset in Preset::ALL {
+        if !wanted.is_empty() && !wanted.iter().any(|w| w == preset.name()) {
+            continue;
+        }
+        let params = FlowParams::preset(preset);
+        let bytes =
+            common::peak_bytes(&HEAP, || compute_flow(frame1, frame2, &params, &mut |_| {})) as f64;
+        println!(
+            "| flow, preset {} | 1024×436 | {:.1} | {:.0} |",
+            preset.name(),
+            bytes / f64::from(1u32 << 20),
+            bytes / pixels
+        );
+    }
 }

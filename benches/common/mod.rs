@@ -39,3 +39,98 @@ pub fn print_row(what: &str, size: &str, times: &[f64]) {
         sorted.len()
     );
 }
+
+/// The system allocator, counting the bytes it has out and the most it had out at once since
+/// [`PeakHeap::reset`]: a bench registers it as its `#[global_allocator]` to report peak memory.
+pub struct PeakHeap {
+    current: std::sync::atomic::AtomicUsize,
+    peak: std::sync::atomic::AtomicUsize,
+}
+
+impl PeakHeap {
+    /// A counter with nothing allocated.
+    pub const fn new() -> Self {
+        PeakHeap {
+            current: std::sync::atomic::AtomicUsize::new(0),
+            peak: std::sync::atomic::AtomicUsize::new(0),
+        }
+    }
+
+    /// Starts a new measurement: the peak becomes what is allocated now.
+    pub fn reset(&self) {
+        use std::sync::atomic::Ordering::SeqCst;
+        self.peak.store(self.current.load(SeqCst), SeqCst);
+    }
+
+    /// The most bytes allocated at once since [`PeakHeap::reset`], less those allocated at
+    /// the reset (what the work in between added at its peak).
+    pub fn peak_above(&self, base: usize) -> usize {
+        self.peak
+            .load(std::sync::atomic::Ordering::SeqCst)
+            .saturating_sub(base)
+    }
+
+    /// Bytes allocated now.
+    pub fn current(&self) -> usize {
+        self.current.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}
+
+// SAFETY: every call is passed on to the system allocator unchanged; the counters only
+// observe the sizes.
+unsafe impl std::alloc::GlobalAlloc for PeakHeap {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: the caller's contract for `alloc` is passed on.
+        self.counted(unsafe { std::alloc::System.alloc(layout) }, layout.size())
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
+        // SAFETY: the caller's contract for `alloc_zeroed` is passed on.
+        self.counted(
+            unsafe { std::alloc::System.alloc_zeroed(layout) },
+            layout.size(),
+        )
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, size: usize) -> *mut u8 {
+        // SAFETY: the caller's contract for `realloc` is passed on.
+        let moved = unsafe { std::alloc::System.realloc(ptr, layout, size) };
+        if !moved.is_null() {
+            self.released(layout.size());
+        }
+        self.counted(moved, size)
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        // SAFETY: the caller's contract for `dealloc` is passed on.
+        unsafe { std::alloc::System.dealloc(ptr, layout) };
+        self.released(layout.size());
+    }
+}
+
+impl PeakHeap {
+    /// `ptr`, after counting its `size` bytes when it is not null.
+    fn counted(&self, ptr: *mut u8, size: usize) -> *mut u8 {
+        use std::sync::atomic::Ordering::SeqCst;
+        if !ptr.is_null() {
+            let now = self.current.fetch_add(size, SeqCst) + size;
+            self.peak.fetch_max(now, SeqCst);
+        }
+        ptr
+    }
+
+    /// Counts `size` bytes given back.
+    fn released(&self, size: usize) {
+        self.current
+            .fetch_sub(size, std::sync::atomic::Ordering::SeqCst);
+    }
+}
+
+/// Peak heap bytes that `f` adds above what is allocated when it starts (`heap` being the
+/// bench's global allocator).
+pub fn peak_bytes<T>(heap: &PeakHeap, f: impl FnOnce() -> T) -> usize {
+    let base = heap.current();
+    heap.reset();
+    std::hint::black_box(f());
+    heap.peak_above(base)
+}
