@@ -4,8 +4,8 @@
 //! only the named presets, `-- edges` only the last row: the motion-edge sharpening alone at
 //! full resolution, both directions (part of the high row; medium sharpens at half resolution,
 //! fast at a quarter). A second table gives each preset's peak heap memory (bytes the flow
-//! allocates at once at its peak, counted by the bench's allocator), in bytes per pixel: what
-//! the page's worker needs on top of the frames when it computes the flow.
+//! allocates at once at its peak, its result included, counted by the bench's allocator), in
+//! bytes per pixel: what the page's worker needs on top of the frames when it computes the flow.
 
 mod common;
 
@@ -81,15 +81,21 @@ fn time_edges(frame1: &Frame, frame2: &Frame) {
 /// The table of each wanted preset's peak heap memory during one flow computation.
 #[cfg(not(target_arch = "wasm32"))]
 fn print_peak_memory(frame1: &Frame, frame2: &Frame, wanted: &[String]) {
-    println!("\nPeak heap memory of the flow (one run; the frames themselves not counted)\n");
+    let presets: Vec<Preset> = Preset::ALL
+        .into_iter()
+        .filter(|p| wanted.is_empty() || wanted.iter().any(|w| w == p.name()))
+        .collect();
+    if presets.is_empty() {
+        return;
+    }
+    println!(
+        "\nPeak heap memory of the flow (one run; its result counted, the frames themselves not)\n"
+    );
     println!("| what | size | peak MiB | bytes per pixel |");
     println!("| --- | --- | --- | --- |");
     let (width, height) = frame1.size();
     let pixels = (width * height) as f64;
-    for preset in Preset::ALL {
-        if !wanted.is_empty() && !wanted.iter().any(|w| w == preset.name()) {
-            continue;
-        }
+    for preset in presets {
         let params = FlowParams::preset(preset);
         let bytes =
             common::peak_bytes(&HEAP, || compute_flow(frame1, frame2, &params, &mut |_| {})) as f64;

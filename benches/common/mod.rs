@@ -1,6 +1,7 @@
 #![allow(dead_code)] // each bench uses only some of these helpers
-//! Shared timing helpers for the `harness = false` benchmarks: run a closure a few times and
-//! print a Markdown table row with the minimum and median wall-clock milliseconds.
+//! Shared helpers for the `harness = false` benchmarks: run a closure a few times and print a
+//! Markdown table row with the minimum and median wall-clock milliseconds; and a counting
+//! allocator ([`PeakHeap`], [`peak_bytes`]) for a bench that reports peak heap memory.
 
 use std::time::Instant;
 

@@ -18,9 +18,10 @@
 //!
 //! Intensities are grey levels in [0, 255]; flow in pixels of the level; derivatives are true
 //! derivatives (OpenCV's unnormalised [−1, 0, 1] kernels make them twice as large, which halves
-//! every increment). Arrays are flat and padded by one pixel on every side (stride w + 2):
-//! border pixels hold zero increments and zero smoothness weights, so the inner loops need no
-//! bounds logic.
+//! every increment). The linear system's arrays are flat and padded by one pixel on every side
+//! (stride w + 2): border pixels hold zero increments and zero smoothness weights, so the inner
+//! loops need no bounds logic. The derivatives the equations are made from are flat w × h
+//! arrays.
 
 use super::pyramid::{Level, sample_clamped};
 use crate::error::{Error, Result};
@@ -81,8 +82,9 @@ const ZETA_SQ: f32 = 0.01;
 const EPSILON_SQ: f32 = 1e-6;
 
 /// The flow (u, v) from `from` to `to` (one pyramid level each, row-major) refined. The arrays
-/// are taken by value: the refinement holds its own padded copy of the flow, so the input's
-/// memory is released while its larger arrays are alive.
+/// are taken by value: the refinement copies the flow into its padded layout and releases the
+/// input before it allocates the increments and coefficients, so the two copies are never held
+/// beside the whole system.
 pub fn refine(
     from: &Level,
     to: &Level,
@@ -112,8 +114,8 @@ pub fn refine(
 /// y-gradient `[6]·du + [7]·dv + [8]`.
 type Constancy = [f32; 9];
 
-/// What the constancy equations are made of at the base flow: `to` warped by (u, v), the first
-/// derivatives of the mean of `from` and the warped image, and their difference (central
+/// What the constancy equations are made of at the base flow, `to` being warped by (u, v): the
+/// first derivatives of the mean of `from` and the warped `to`, and their difference (central
 /// differences, one-sided at borders). The equations themselves ([`Derivatives::equations`])
 /// are made a row at a time when each fixed-point iteration needs them: holding them for the
 /// whole level would take 36 bytes per pixel, these arrays take 13.
@@ -136,7 +138,6 @@ struct SecondDerivativeRows {
     iyz: Vec<f32>,
     ixx: Vec<f32>,
     ixy: Vec<f32>,
-    unused: Vec<f32>,
     iyy: Vec<f32>,
 }
 
@@ -177,7 +178,6 @@ impl Derivatives {
             iyz: row(),
             ixx: row(),
             ixy: row(),
-            unused: row(),
             iyy: row(),
         }
     }
@@ -192,12 +192,13 @@ impl Derivatives {
             iyz,
             ixx,
             ixy,
-            unused,
             iyy,
         } = rows;
-        central_differences_row(&self.iz, w, h, y, ixz, iyz);
-        central_differences_row(&self.ix, w, h, y, ixx, ixy);
-        central_differences_row(&self.iy, w, h, y, unused, iyy);
+        x_differences_row(&self.iz, w, y, ixz);
+        y_differences_row(&self.iz, w, h, y, iyz);
+        x_differences_row(&self.ix, w, y, ixx);
+        y_differences_row(&self.ix, w, h, y, ixy);
+        y_differences_row(&self.iy, w, h, y, iyy);
         let at = y * w;
         let (ix, iy, iz) = (
             &self.ix[at..][..w],
@@ -237,26 +238,24 @@ fn central_differences(f: &[f32], w: usize, h: usize) -> (Vec<f32>, Vec<f32>) {
         .zip(dy.chunks_exact_mut(w))
         .enumerate()
     {
-        central_differences_row(f, w, h, y, dx, dy);
+        x_differences_row(f, w, y, dx);
+        y_differences_row(f, w, h, y, dy);
     }
     (dx, dy)
 }
 
-/// Row `y` of [`central_differences`] of `f` into `dx` and `dy` (`w` values each).
-fn central_differences_row(
-    f: &[f32],
-    w: usize,
-    h: usize,
-    y: usize,
-    dx: &mut [f32],
-    dy: &mut [f32],
-) {
+/// Row `y` of the ∂/∂x of [`central_differences`] of `f` (`w` wide) into `dx` (`w` values).
+fn x_differences_row(f: &[f32], w: usize, y: usize, dx: &mut [f32]) {
     let row = &f[y * w..][..w];
     dx[0] = row[1] - row[0];
     for (d, t) in dx[1..w - 1].iter_mut().zip(row.windows(3)) {
         *d = 0.5 * (t[2] - t[0]);
     }
     dx[w - 1] = row[w - 1] - row[w - 2];
+}
+
+/// Row `y` of the ∂/∂y of [`central_differences`] of `f` (`w × h`) into `dy` (`w` values).
+fn y_differences_row(f: &[f32], w: usize, h: usize, y: usize, dy: &mut [f32]) {
     let (up, down) = (y.saturating_sub(1), (y + 1).min(h - 1));
     let scale = 1.0 / (down - up) as f32;
     let (above, below) = (&f[up * w..][..w], &f[down * w..][..w]);

@@ -241,8 +241,8 @@ pub fn refine_motion(points: &[Correspondence], start: &Motion, iterations: usiz
     let mut c0 = cost(&r0);
     let mut damping = 1e-3;
     for _ in 0..iterations {
-        let (jtj, jtr) = normal_equations(points, &current, &r0);
         let basis = tangent_basis(&current.t);
+        let (jtj, jtr) = normal_equations(points, &current, &basis, &r0);
         let mut improved = false;
         for _ in 0..6 {
             let mut m = jtj;
@@ -272,19 +272,19 @@ pub fn refine_motion(points: &[Correspondence], start: &Motion, iterations: usiz
 }
 
 /// JᵀJ and Jᵀr of the signed Sampson residuals `r0` of `points` at `motion`, with J the
-/// numerical Jacobian over [`apply`]'s 5 parameters (forward differences of 10⁻⁷), summed point
-/// by point.
+/// numerical Jacobian over [`apply`]'s 5 parameters (on `basis`, the tangent basis of the
+/// motion's t̂; forward differences of 10⁻⁷), summed point by point.
 fn normal_equations(
     points: &[Correspondence],
     motion: &Motion,
+    basis: &[Vector3<f64>; 2],
     r0: &[f64],
 ) -> (nalgebra::SMatrix<f64, 5, 5>, nalgebra::SVector<f64, 5>) {
     const STEP: f64 = 1e-7;
-    let basis = tangent_basis(&motion.t);
     let moved: [Matrix3<f64>; 5] = std::array::from_fn(|k| {
         let mut d = [0.0; 5];
         d[k] = STEP;
-        apply(motion, &d, &basis).essential()
+        apply(motion, &d, basis).essential()
     });
     let mut jtj = nalgebra::SMatrix::<f64, 5, 5>::zeros();
     let mut jtr = nalgebra::SVector::<f64, 5>::zeros();
@@ -351,8 +351,8 @@ fn sampson_ratio(num: f64, den: f64) -> f64 {
     }
 }
 
-/// The Sampson error's numerator x̄₂ᵀ E x̄₁ and denominator (the squared first two coordinates
-/// of E x̄₁ and Eᵀ x̄₂).
+/// The Sampson error's numerator x̄₂ᵀ E x̄₁ and denominator (the sum of the squared first two
+/// coordinates of E x̄₁ and of Eᵀ x̄₂).
 #[inline]
 fn sampson_parts(e: &Matrix3<f64>, c: &Correspondence) -> (f64, f64) {
     let ex = e * c.x1;
