@@ -97,8 +97,7 @@ fn print_peak_memory(frame1: &Frame, frame2: &Frame, wanted: &[String]) {
     let pixels = (width * height) as f64;
     for preset in presets {
         let params = FlowParams::preset(preset);
-        let bytes =
-            common::peak_bytes(&HEAP, || compute_flow(frame1, frame2, &params, &mut |_| {})) as f64;
+        let bytes = HEAP.peak_during(|| compute_flow(frame1, frame2, &params, &mut |_| {})) as f64;
         println!(
             "| flow, preset {} | 1024×436 | {:.1} | {:.0} |",
             preset.name(),

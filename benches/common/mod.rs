@@ -1,7 +1,7 @@
 #![allow(dead_code)] // each bench uses only some of these helpers
 //! Shared helpers for the `harness = false` benchmarks: run a closure a few times and print a
 //! Markdown table row with the minimum and median wall-clock milliseconds; and a counting
-//! allocator ([`PeakHeap`], [`peak_bytes`]) for a bench that reports peak heap memory.
+//! allocator ([`PeakHeap`]) for a bench that reports peak heap memory.
 
 use std::time::Instant;
 
@@ -41,8 +41,8 @@ pub fn print_row(what: &str, size: &str, times: &[f64]) {
     );
 }
 
-/// The system allocator, counting the bytes it has out and the most it had out at once since
-/// [`PeakHeap::reset`]: a bench registers it as its `#[global_allocator]` to report peak memory.
+/// The system allocator, counting the bytes it has out and the most it had out at once: a
+/// bench registers it as its `#[global_allocator]` and measures with [`PeakHeap::peak_during`].
 pub struct PeakHeap {
     current: std::sync::atomic::AtomicUsize,
     peak: std::sync::atomic::AtomicUsize,
@@ -57,23 +57,30 @@ impl PeakHeap {
         }
     }
 
-    /// Starts a new measurement: the peak becomes what is allocated now.
-    pub fn reset(&self) {
+    /// Peak heap bytes that `f` adds above what is allocated when it starts (this being the
+    /// bench's global allocator; one thread).
+    pub fn peak_during<T>(&self, f: impl FnOnce() -> T) -> usize {
         use std::sync::atomic::Ordering::SeqCst;
-        self.peak.store(self.current.load(SeqCst), SeqCst);
+        let base = self.current.load(SeqCst);
+        self.peak.store(base, SeqCst);
+        std::hint::black_box(f());
+        self.peak.load(SeqCst).saturating_sub(base)
     }
 
-    /// The most bytes allocated at once since [`PeakHeap::reset`], less those allocated at
-    /// the reset (what the work in between added at its peak).
-    pub fn peak_above(&self, base: usize) -> usize {
-        self.peak
-            .load(std::sync::atomic::Ordering::SeqCst)
-            .saturating_sub(base)
+    /// `ptr`, after counting its `size` bytes when it is not null.
+    fn counted(&self, ptr: *mut u8, size: usize) -> *mut u8 {
+        use std::sync::atomic::Ordering::SeqCst;
+        if !ptr.is_null() {
+            let now = self.current.fetch_add(size, SeqCst) + size;
+            self.peak.fetch_max(now, SeqCst);
+        }
+        ptr
     }
 
-    /// Bytes allocated now.
-    pub fn current(&self) -> usize {
-        self.current.load(std::sync::atomic::Ordering::SeqCst)
+    /// Counts `size` bytes given back.
+    fn released(&self, size: usize) {
+        self.current
+            .fetch_sub(size, std::sync::atomic::Ordering::SeqCst);
     }
 }
 
@@ -107,31 +114,4 @@ unsafe impl std::alloc::GlobalAlloc for PeakHeap {
         unsafe { std::alloc::System.dealloc(ptr, layout) };
         self.released(layout.size());
     }
-}
-
-impl PeakHeap {
-    /// `ptr`, after counting its `size` bytes when it is not null.
-    fn counted(&self, ptr: *mut u8, size: usize) -> *mut u8 {
-        use std::sync::atomic::Ordering::SeqCst;
-        if !ptr.is_null() {
-            let now = self.current.fetch_add(size, SeqCst) + size;
-            self.peak.fetch_max(now, SeqCst);
-        }
-        ptr
-    }
-
-    /// Counts `size` bytes given back.
-    fn released(&self, size: usize) {
-        self.current
-            .fetch_sub(size, std::sync::atomic::Ordering::SeqCst);
-    }
-}
-
-/// Peak heap bytes that `f` adds above what is allocated when it starts (`heap` being the
-/// bench's global allocator).
-pub fn peak_bytes<T>(heap: &PeakHeap, f: impl FnOnce() -> T) -> usize {
-    let base = heap.current();
-    heap.reset();
-    std::hint::black_box(f());
-    heap.peak_above(base)
 }
