@@ -124,7 +124,7 @@ pub struct ScaleParams {
     /// Contact evidence of a pair (see `contact_evidence`): flow jump (px) at which the
     /// flow-continuity evidence falls to 1/e.
     pub flow_scale_px: f64,
-    /// Smallest contact evidence of a pair (a pair of parallel planes whose flow jumps).
+    /// Smallest contact evidence of a pair (a pair whose flow jumps, not standing on ground).
     pub evidence_floor: f64,
     /// Weight factor of a pair where the lower piece is ground-like (its plane's normal within
     /// 30° of the camera's vertical) and the upper piece stands on it: a standing thing touches
@@ -1674,24 +1674,34 @@ pub fn polish(problem: &Problem, s: &mut [f64], sweeps: usize) {
 }
 
 /// How much a boundary pixel pair (p, q) between two pieces says that they touch, in
-/// [evidence_floor, 1]: the larger of
-/// - the sine of the angle between their planes: planes at an angle meet only along their line
-///   of intersection, so a boundary that matches there is not an accident (feet on the floor);
+/// [evidence_floor, 1]:
 /// - the continuity of the flow across the pair, exp(−‖f(p) − f(q)‖ / flow_scale_px): a surface
-///   that really continues (a waving flag) moves continuously.
+///   that really continues (a waving flag) moves continuously;
+/// - where one piece stands on the other (`standing`: the lower pixel's piece is ground-like), at
+///   least the sine of the angle between their planes: feet move apart from the floor, yet meet
+///   it along the line where their planes cross, so a boundary that matches there is no accident.
 ///
-/// What is left weak is a pair of nearly parallel planes whose flow jumps: an occlusion (one
-/// person in front of another), which scaling one plane onto the other would fake as a contact.
+/// Elsewhere planes at an angle are no evidence: the planes of small pieces of a bending sheet,
+/// or along a floating object's outline, lie at noisy angles to their neighbours', and counting
+/// those glued the flag's bands and FlyingThings3D's objects to their neighbours at wrong
+/// depths (docs/RESULTS.md, Stop 50). What is left weak is a pair whose flow jumps: an occlusion
+/// (one person in front of another), which scaling one plane onto the other would fake as a
+/// contact.
 fn contact_evidence(
     m_a: &Vector3<f64>,
     m_b: &Vector3<f64>,
     f_p: [f32; 2],
     f_q: [f32; 2],
+    standing: bool,
     params: &ScaleParams,
 ) -> f64 {
-    let sin = m_a.normalize().cross(&m_b.normalize()).norm();
     let continuity = exp(-flow_jump(f_p, f_q) / params.flow_scale_px);
-    let e = sin.max(continuity);
+    let e = if standing {
+        let sin = m_a.normalize().cross(&m_b.normalize()).norm();
+        sin.max(continuity)
+    } else {
+        continuity
+    };
     if e.is_finite() {
         e.max(params.evidence_floor)
     } else {
@@ -1997,7 +2007,9 @@ fn atanh_series(u: f64) -> f64 {
 
 /// The weight of boundary pair `j` of `edge`: colour similarity exp(−‖ΔI‖ / colour_scale)
 /// times the `contact_evidence` of the two pieces' planes and flow there, times
-/// `occluded_weight` where either pixel failed the forward–backward check.
+/// `occluded_weight` where either pixel failed the forward–backward check, times
+/// `support_weight` where the pair is stacked and the lower pixel's piece is ground-like (the
+/// upper piece may stand on it).
 pub fn pair_weight(
     soup: &Soup,
     inputs: &ScaleInputs,
@@ -2010,11 +2022,6 @@ pub fn pair_weight(
     let flow = inputs.flow.data();
     let reliable = inputs.reliable.data();
     let (pa, pb) = (&soup.pieces[edge.a as usize], &soup.pieces[edge.b as usize]);
-    let mut w = exp(-(edge.colour_diff[j] as f64) / params.colour_scale)
-        * contact_evidence(&pa.m, &pb.m, flow[p], flow[q], params);
-    if !(reliable[p] && reliable[q]) {
-        w *= params.occluded_weight;
-    }
     // Vertical pairs: the piece of the lower pixel may support the other.
     let width = inputs.superpixels.labels.width();
     let lower = if q == p + width {
@@ -2024,11 +2031,15 @@ pub fn pair_weight(
     } else {
         None
     };
-    if let Some(ground) = lower {
-        let n = ground.m.normalize();
-        if n.y.abs() > cos(30f64.to_radians()) {
-            w *= params.support_weight;
-        }
+    let standing =
+        lower.is_some_and(|ground| ground.m.normalize().y.abs() > cos(30f64.to_radians()));
+    let mut w = exp(-(edge.colour_diff[j] as f64) / params.colour_scale)
+        * contact_evidence(&pa.m, &pb.m, flow[p], flow[q], standing, params);
+    if !(reliable[p] && reliable[q]) {
+        w *= params.occluded_weight;
+    }
+    if standing {
+        w *= params.support_weight;
     }
     w
 }
@@ -2122,6 +2133,28 @@ pub fn scale_confidence(soup: &Soup, inputs: &ScaleInputs, params: &ScaleParams)
 mod tests {
     use super::*;
     use crate::rng::Rng;
+
+    #[test]
+    fn planes_at_an_angle_are_evidence_of_contact_only_where_one_stands_on_the_other() {
+        let params = ScaleParams::default();
+        // Planes m = n / d: a wall facing the camera at 5 and a floor 2 below it (y down).
+        let (wall, floor) = (Vector3::new(0.0, 0.0, 0.2), Vector3::new(0.0, 0.5, 0.0));
+        // A 3 px jump in the flow: continuity exp(−6) alone is below the floor.
+        let (still, moving) = ([0.0f32, 0.0], [3.0f32, 0.0]);
+        let standing = contact_evidence(&wall, &floor, still, moving, true, &params);
+        assert!(
+            (standing - 1.0).abs() < 1e-9,
+            "feet on the floor: {standing}"
+        );
+        let beside = contact_evidence(&wall, &floor, still, moving, false, &params);
+        assert_eq!(beside, params.evidence_floor);
+        // Parallel planes get nothing from their angle, standing or not.
+        let on_top = contact_evidence(&floor, &floor, still, moving, true, &params);
+        assert_eq!(on_top, params.evidence_floor);
+        // Continuous flow is evidence of contact wherever the pair lies.
+        let together = contact_evidence(&wall, &floor, moving, moving, false, &params);
+        assert!((together - 1.0).abs() < 1e-9);
+    }
 
     #[test]
     fn a_slanted_boundary_samples_both_kinds_of_pair_in_proportion() {
