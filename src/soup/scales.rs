@@ -124,7 +124,8 @@ pub struct ScaleParams {
     /// Contact evidence of a pair (see `contact_evidence`): flow jump (px) at which the
     /// flow-continuity evidence falls to 1/e.
     pub flow_scale_px: f64,
-    /// Smallest contact evidence of a pair (a pair whose flow jumps, not standing on ground).
+    /// Smallest contact evidence of a pair (a pair whose flow jumps, unless one piece stands on
+    /// the other at an angle).
     pub evidence_floor: f64,
     /// Weight factor of a pair where the lower piece is ground-like (its plane's normal within
     /// 30° of the camera's vertical) and the upper piece stands on it: a standing thing touches
@@ -1678,15 +1679,17 @@ pub fn polish(problem: &Problem, s: &mut [f64], sweeps: usize) {
 /// - the continuity of the flow across the pair, exp(−‖f(p) − f(q)‖ / flow_scale_px): a surface
 ///   that really continues (a waving flag) moves continuously;
 /// - where one piece stands on the other (`standing`: the lower pixel's piece is ground-like), at
-///   least the sine of the angle between their planes: feet move apart from the floor, yet meet
-///   it along the line where their planes cross, so a boundary that matches there is no accident.
+///   least the sine of the angle between their planes: feet move while the floor does not, so
+///   the flow jumps between them, yet they meet along the line where their planes cross, and a
+///   boundary that matches there is no accident.
 ///
 /// Elsewhere planes at an angle are no evidence: the planes of small pieces of a bending sheet,
 /// or along a floating object's outline, lie at noisy angles to their neighbours', and counting
 /// those glued the flag's bands and FlyingThings3D's objects to their neighbours at wrong
 /// depths (docs/RESULTS.md, Stop 50). What is left weak is a pair whose flow jumps: an occlusion
 /// (one person in front of another), which scaling one plane onto the other would fake as a
-/// contact.
+/// contact. Unknown flow (a given flow's missing vectors) or a piece without a plane gives no
+/// evidence of its kind (`f64::max` passes over NaN).
 fn contact_evidence(
     m_a: &Vector3<f64>,
     m_b: &Vector3<f64>,
@@ -1696,17 +1699,12 @@ fn contact_evidence(
     params: &ScaleParams,
 ) -> f64 {
     let continuity = exp(-flow_jump(f_p, f_q) / params.flow_scale_px);
-    let e = if standing {
-        let sin = m_a.normalize().cross(&m_b.normalize()).norm();
-        sin.max(continuity)
+    let angle = if standing {
+        m_a.normalize().cross(&m_b.normalize()).norm()
     } else {
-        continuity
+        0.0
     };
-    if e.is_finite() {
-        e.max(params.evidence_floor)
-    } else {
-        1.0
-    }
+    continuity.max(angle).max(params.evidence_floor)
 }
 
 /// The boundary pairs of `edge` that the contact terms use, each with the ray (normalised,
@@ -2136,8 +2134,13 @@ mod tests {
 
     #[test]
     fn planes_at_an_angle_are_evidence_of_contact_only_where_one_stands_on_the_other() {
-        let params = ScaleParams::default();
-        // Planes m = n / d: a wall facing the camera at 5 and a floor 2 below it (y down).
+        let params = ScaleParams {
+            flow_scale_px: 0.5,
+            evidence_floor: 0.2,
+            ..ScaleParams::default()
+        };
+        // Planes m = n / d: a wall facing the camera at depth 5, and a floor 2 below the camera
+        // (y down).
         let (wall, floor) = (Vector3::new(0.0, 0.0, 0.2), Vector3::new(0.0, 0.5, 0.0));
         // A 3 px jump in the flow: continuity exp(−6) alone is below the floor.
         let (still, moving) = ([0.0f32, 0.0], [3.0f32, 0.0]);
@@ -2154,6 +2157,12 @@ mod tests {
         // Continuous flow is evidence of contact wherever the pair lies.
         let together = contact_evidence(&wall, &floor, moving, moving, false, &params);
         assert!((together - 1.0).abs() < 1e-9);
+        // Unknown flow is no evidence; a piece without a plane has no angle.
+        let unknown = [f32::NAN, f32::NAN];
+        let blind = contact_evidence(&wall, &floor, still, unknown, false, &params);
+        assert_eq!(blind, params.evidence_floor);
+        let flat = contact_evidence(&Vector3::zeros(), &floor, unknown, unknown, true, &params);
+        assert_eq!(flat, params.evidence_floor);
     }
 
     #[test]
