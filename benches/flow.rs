@@ -33,7 +33,7 @@ fn main() {
         .filter(|a| !a.starts_with('-'))
         .collect();
     for preset in Preset::ALL {
-        if !wanted.is_empty() && !wanted.iter().any(|w| w == preset.name()) {
+        if !is_wanted(&wanted, preset.name()) {
             continue;
         }
         let params = FlowParams::preset(preset);
@@ -46,11 +46,17 @@ fn main() {
             &times,
         );
     }
-    if wanted.is_empty() || wanted.iter().any(|w| w == "edges") {
+    if is_wanted(&wanted, "edges") {
         time_edges(&scene.frame1, &scene.frame2);
     }
     #[cfg(not(target_arch = "wasm32"))]
     print_peak_memory(&scene.frame1, &scene.frame2, &wanted);
+}
+
+/// Whether the bench's arguments ask for the row `name` (a preset's name or `edges`): every row
+/// when none are given.
+fn is_wanted(wanted: &[String], name: &str) -> bool {
+    wanted.is_empty() || wanted.iter().any(|w| w == name)
 }
 
 /// The row of the motion-edge sharpening alone, both directions, at full resolution.
@@ -83,7 +89,7 @@ fn time_edges(frame1: &Frame, frame2: &Frame) {
 fn print_peak_memory(frame1: &Frame, frame2: &Frame, wanted: &[String]) {
     let presets: Vec<Preset> = Preset::ALL
         .into_iter()
-        .filter(|p| wanted.is_empty() || wanted.iter().any(|w| w == p.name()))
+        .filter(|p| is_wanted(wanted, p.name()))
         .collect();
     if presets.is_empty() {
         return;

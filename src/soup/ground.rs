@@ -21,7 +21,8 @@ use crate::superpixels::Superpixels;
 
 /// A plane counts as ground-like when its normal is within this angle of the camera's downward
 /// axis (30°: floors and roads seen from a camera held roughly level, or tilted by up to 30°).
-const GROUND_TILT_DEG: f64 = 30.0;
+/// The contact terms use it too (`scales::pair_weight`: a piece standing on a ground-like one).
+pub const GROUND_TILT_DEG: f64 = 30.0;
 
 /// Two pieces lie on one ground plane when their anchors' log-depths differ by less than this
 /// under it (5 %: the noise of well-measured planes, well below a kerb or a step).

@@ -2029,8 +2029,8 @@ pub fn pair_weight(
     } else {
         None
     };
-    let standing =
-        lower.is_some_and(|ground| ground.m.normalize().y.abs() > cos(30f64.to_radians()));
+    let cos_tilt = cos(ground::GROUND_TILT_DEG.to_radians());
+    let standing = lower.is_some_and(|ground| ground.m.normalize().y.abs() > cos_tilt);
     let mut w = exp(-(edge.colour_diff[j] as f64) / params.colour_scale)
         * contact_evidence(&pa.m, &pb.m, flow[p], flow[q], standing, params);
     if !(reliable[p] && reliable[q]) {
