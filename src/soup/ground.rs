@@ -14,15 +14,29 @@
 
 use nalgebra::{Matrix3, Vector3};
 
-use super::Soup;
+use super::{Piece, Soup};
 use crate::camera::Intrinsics;
 use crate::numeric::{cos, ln};
 use crate::superpixels::Superpixels;
 
 /// A plane counts as ground-like when its normal is within this angle of the camera's downward
 /// axis (30°: floors and roads seen from a camera held roughly level, or tilted by up to 30°).
-/// The contact terms use it too (`scales::pair_weight`: a piece standing on a ground-like one).
+/// The contact terms use the same test (`scales::pair_weight`: a piece standing on a ground-like
+/// one).
 pub const GROUND_TILT_DEG: f64 = 30.0;
+
+/// Whether the plane `m` (mᵀX = 1 in camera-1 coordinates, y down) is ground-like: it lies
+/// below the camera (m_y > 0; a ceiling's m_y is negative) with its normal within
+/// [`GROUND_TILT_DEG`] of the camera's downward axis.
+pub fn is_ground_like(m: &Vector3<f64>) -> bool {
+    m.y > cos(GROUND_TILT_DEG.to_radians()) * m.norm()
+}
+
+/// Whether `piece` has a ground-like plane ([`is_ground_like`]) of its own: a plane borrowed
+/// from a neighbour ([`super::Piece::degenerate`]) is a guess, not a floor.
+pub fn has_ground_like_plane(piece: &Piece) -> bool {
+    piece.degenerate.is_none() && is_ground_like(&piece.m)
+}
 
 /// Two pieces lie on one ground plane when their anchors' log-depths differ by less than this
 /// under it (5 %: the noise of well-measured planes, well below a kerb or a step).
@@ -73,13 +87,12 @@ pub fn ground_plane(
     min_share: f64,
 ) -> Option<Vector3<f64>> {
     let ray = |[u, v]: [f64; 2]| Vector3::from(intrinsics.ray(u, v));
-    let cos_tilt = cos(GROUND_TILT_DEG.to_radians());
     // (piece, anchor ray) of every ground-like candidate.
     let ground_like: Vec<(usize, Vector3<f64>)> = soup
         .pieces
         .iter()
         .enumerate()
-        .filter(|&(i, p)| candidates[i] && p.degenerate.is_none() && p.m.y > cos_tilt * p.m.norm())
+        .filter(|&(i, p)| candidates[i] && has_ground_like_plane(p))
         .map(|(i, _)| (i, ray(superpixels.segments[i].anchor)))
         .filter(|&(i, r)| soup.pieces[i].m.dot(&r) > 0.0)
         .collect();
@@ -120,7 +133,7 @@ pub fn ground_plane(
         }
         let total = superpixels.labels.width() * superpixels.labels.height();
         let share = pixels_of(&voters) / total.max(1) as f64;
-        return (share >= min_share && m.y > cos_tilt * m.norm()).then_some(m);
+        return (share >= min_share && is_ground_like(&m)).then_some(m);
     }
     None
 }
@@ -408,6 +421,40 @@ mod tests {
         let no_floor: Vec<bool> = soup.pieces.iter().map(|p| p.m != FLOOR).collect();
         let m = ground_plane(&soup, &sp, &K, &no_floor, 0.1).expect("the table top");
         assert!((m - table).norm() < 1e-9, "{m}");
+    }
+
+    #[test]
+    fn a_plane_of_its_own_below_the_camera_is_ground_like_and_a_ceiling_or_a_borrowed_one_is_not() {
+        let (soup, _) = room(6);
+        let floor = *soup
+            .pieces
+            .iter()
+            .find(|p| p.m == FLOOR)
+            .expect("the room has a floor");
+        assert!(has_ground_like_plane(&floor));
+        // The ceiling y = −2: as level as the floor, but above the camera.
+        let ceiling = Piece { m: -FLOOR, ..floor };
+        assert!(!has_ground_like_plane(&ceiling));
+        // The wall z = 10 faces the camera.
+        assert!(!has_ground_like_plane(&Piece {
+            m: Vector3::new(0.0, 0.0, 0.1),
+            ..floor
+        }));
+        // The floor's plane carried over from a neighbour is a guess.
+        let borrowed = Piece {
+            degenerate: Some(crate::soup::Degeneracy::TooFewPixels),
+            ..floor
+        };
+        assert!(!has_ground_like_plane(&borrowed));
+        // Tilted by 25° it still counts, by 35° not (`GROUND_TILT_DEG`).
+        for (deg, counts) in [(25.0f64, true), (35.0, false)] {
+            let a = deg.to_radians();
+            assert_eq!(
+                is_ground_like(&Vector3::new(0.0, a.cos(), a.sin())),
+                counts,
+                "{deg}°"
+            );
+        }
     }
 
     #[test]

@@ -90,7 +90,7 @@ use crate::camera::Intrinsics;
 use crate::flow::FlowField;
 use crate::grid::Grid;
 use crate::mrf::trws::{Mrf, TrwsOptions, trws};
-use crate::numeric::{atanh, cos, exp, hypot, ln, min, tanh, weighted_median};
+use crate::numeric::{atanh, exp, hypot, ln, min, tanh, weighted_median};
 use crate::superpixels::Superpixels;
 use crate::superpixels::graph::{BoundaryEdge, BoundaryGraph};
 use crate::union_find::{find, union};
@@ -127,8 +127,9 @@ pub struct ScaleParams {
     /// Smallest contact evidence of a pair (a pair whose flow jumps, unless one piece stands on
     /// the other at an angle).
     pub evidence_floor: f64,
-    /// Weight factor of a pair where the lower piece is ground-like (its plane's normal within
-    /// 30° of the camera's vertical) and the upper piece stands on it: a standing thing touches
+    /// Weight factor of a pair where the lower piece is ground-like (a plane of its own below the
+    /// camera, its normal within 30° of the camera's downward axis: [`ground::has_ground_like_plane`],
+    /// as for the ground plane's candidates) and the upper piece stands on it: a standing thing touches
     /// what it stands on, while its sides and top may or may not touch what is behind them.
     pub support_weight: f64,
     /// A piece's scale counts as known when its [`scale_confidence`] is at least this: moving
@@ -2006,8 +2007,8 @@ fn atanh_series(u: f64) -> f64 {
 /// The weight of boundary pair `j` of `edge`: colour similarity exp(−‖ΔI‖ / colour_scale)
 /// times the `contact_evidence` of the two pieces' planes and flow there, times
 /// `occluded_weight` where either pixel failed the forward–backward check, times
-/// `support_weight` where the pair is stacked and the lower pixel's piece is ground-like (the
-/// upper piece may stand on it).
+/// `support_weight` where the pair is stacked and the lower pixel's piece is ground-like
+/// ([`ground::has_ground_like_plane`]: the upper piece may stand on it).
 pub fn pair_weight(
     soup: &Soup,
     inputs: &ScaleInputs,
@@ -2029,8 +2030,7 @@ pub fn pair_weight(
     } else {
         None
     };
-    let cos_tilt = cos(ground::GROUND_TILT_DEG.to_radians());
-    let standing = lower.is_some_and(|ground| ground.m.normalize().y.abs() > cos_tilt);
+    let standing = lower.is_some_and(ground::has_ground_like_plane);
     let mut w = exp(-(edge.colour_diff[j] as f64) / params.colour_scale)
         * contact_evidence(&pa.m, &pb.m, flow[p], flow[q], standing, params);
     if !(reliable[p] && reliable[q]) {
