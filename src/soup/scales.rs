@@ -1679,10 +1679,11 @@ pub fn polish(problem: &Problem, s: &mut [f64], sweeps: usize) {
 /// [evidence_floor, 1]:
 /// - the continuity of the flow across the pair, exp(−‖f(p) − f(q)‖ / flow_scale_px): a surface
 ///   that really continues (a waving flag) moves continuously;
-/// - where one piece stands on the other (`standing`: the lower pixel's piece is ground-like), at
-///   least the sine of the angle between their planes: feet move while the floor does not, so
-///   the flow jumps between them, yet they meet along the line where their planes cross, and a
-///   boundary that matches there is no accident.
+/// - where one piece stands on the other (`standing`: the lower pixel's piece has a ground-like
+///   plane of its own, [`ground::has_ground_like_plane`]), at least the sine of the angle
+///   between their planes: feet move while the floor does not, so the flow jumps between them,
+///   yet they meet along the line where their planes cross, and a boundary that matches there
+///   is no accident.
 ///
 /// Elsewhere planes at an angle are no evidence: the planes of small pieces of a bending sheet,
 /// or along a floating object's outline, lie at noisy angles to their neighbours', and counting
