@@ -21,8 +21,8 @@ use crate::superpixels::Superpixels;
 
 /// A plane counts as ground-like when its normal is within this angle of the camera's downward
 /// axis (30°: floors and roads seen from a camera held roughly level, or tilted by up to 30°).
-/// The contact terms use the same test (`scales::pair_weight`: a piece standing on a ground-like
-/// one).
+/// The contact terms use the same test through [`has_ground_like_plane`] (`scales::pair_weight`:
+/// a piece standing on a ground-like one).
 pub const GROUND_TILT_DEG: f64 = 30.0;
 
 /// Whether the plane `m` (mᵀX = 1 in camera-1 coordinates, y down) is ground-like: it lies

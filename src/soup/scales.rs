@@ -127,10 +127,11 @@ pub struct ScaleParams {
     /// Smallest contact evidence of a pair (a pair whose flow jumps, unless one piece stands on
     /// the other at an angle).
     pub evidence_floor: f64,
-    /// Weight factor of a pair where the lower piece is ground-like (a plane of its own below the
-    /// camera, its normal within 30° of the camera's downward axis: [`ground::has_ground_like_plane`],
-    /// as for the ground plane's candidates) and the upper piece stands on it: a standing thing touches
-    /// what it stands on, while its sides and top may or may not touch what is behind them.
+    /// Weight factor of a pair where the lower piece is ground-like (a plane of its own below
+    /// the camera, its normal within 30° of the camera's downward axis:
+    /// [`ground::has_ground_like_plane`], as for the ground plane's candidates) and the upper
+    /// piece stands on it: a standing thing touches what it stands on, while its sides and top
+    /// may or may not touch what is behind them.
     pub support_weight: f64,
     /// A piece's scale counts as known when its [`scale_confidence`] is at least this: moving
     /// its rigid segment by 25 % raises the energy of its rim by a tenth of what it would cost
