@@ -94,15 +94,16 @@ pub struct Params {
     /// was computed with a preset that has a finer one, the reconstruction is made again from
     /// the finer preset's flow and the pass that pins more is kept; 0 never does. Flow too
     /// coarse to show where movers meet the world leaves their scales to guesses, which may
-    /// be worse than a constant depth: with preset `medium` the crowd pinned 38–43 % at four
-    /// of five superpixel counts (1300–1700; MRE up to 1.28 against 0.27 for constant depth)
-    /// and 55–78 % with `high` (0.14–0.19), while every other case pinned 74–100 % with
-    /// `medium`. 0.7: below every other case, and above the crowd's 61 % when
-    /// `scales.min_confidence` is 20 % lower (at 0.6 that brought the 1.28 back). The share is
-    /// that of each pass before fusion (which runs once, on the kept pass). (These shares were
-    /// measured with the scale confidence alone; not counting borrowed planes lowers them by up
-    /// to 0.08 and changed no pass kept with the page's settings on the nine cases at 1500,
-    /// nor on the crowd, the table and the road at 1300–1700.)
+    /// be worse than a constant depth: when 0.7 was chosen, with preset `medium` the crowd
+    /// pinned 38–43 % at four of five superpixel counts (1300–1700; MRE up to 1.28 against
+    /// 0.27 for constant depth) and 55–78 % with `high` (0.14–0.19), while every other case
+    /// pinned 74–100 % with `medium`; 0.7 lay below every other case, and above the crowd's
+    /// 61 % when `scales.min_confidence` is 20 % lower (at 0.6 that brought the 1.28 back).
+    /// Since then the contact terms pin more: with `medium` at 1500 superpixels (one
+    /// reconstruction, the page's refinement) the nine cases pin 70–96 % (the table 70 %,
+    /// FlyingThings3D 71 % from `high`'s flow, the crowd 79 %), and the crowd is made again
+    /// for its ambiguous camera motion instead. The share is that of each pass before fusion
+    /// (which runs once, on the kept pass), counting borrowed planes as unpinned.
     pub min_pinned_share: f64,
     /// Whether a reconstruction whose scale solve finds no ground plane is made again from the
     /// next finer preset's flow (and a finer pass that finds one is kept); inert with

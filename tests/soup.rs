@@ -655,14 +655,14 @@ fn a_reconstruction_that_pins_too_little_is_made_again_from_finer_flow() {
 
 #[test]
 fn the_page_s_flow_preset_beats_a_constant_depth_on_the_crowd() {
-    // With the page's preset (medium, half-resolution flow) the crowd's floor is misplaced, no
-    // ground plane is found, and the scales of only 41 % of the image are pinned at the
-    // page's 1500 superpixels: the walkers sank 4-18x too deep behind the wall (MRE 1.28
-    // against 0.27 for a constant depth). Made again from preset high's flow, 77 % are pinned
-    // and the MRE is 0.19.
+    // With the page's preset (medium, half-resolution flow) at 1500 superpixels a motion
+    // 8.9 degrees from the camera's explains the image within 0.6 %: the camera's motion is
+    // ambiguous. Kept, that pass gives MRE 0.128 (a constant depth 0.27; when too few scales
+    // were pinned with this flow, the walkers once sank 4-18x too deep, 1.28). Made again
+    // from preset high's flow: 0.057.
     let (mre, floor) = mre_with_the_page_s_flow(SceneKind::Crowd);
     assert!(
-        mre < 0.25 && mre < floor,
+        mre < 0.09 && mre < floor,
         "crowd, preset medium: MRE {mre} (constant depth {floor})"
     );
 }
