@@ -31,7 +31,7 @@ pub struct Link {
     /// The piece (a or b) whose pixels lie directly above the other's on at least
     /// [`ground::MIN_RESTING_PIXELS`] of the boundary's pixel pairs (the one with more such
     /// pairs; `None` on a tie): where things stand on a floor, the piece below it may be floor
-    /// in front of it (see `segment_pair_terms`).
+    /// in front of it (see `priors::segment_pair_terms`).
     pub upper: Option<usize>,
 }
 

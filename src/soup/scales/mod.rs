@@ -137,7 +137,7 @@ pub struct ScaleParams {
     pub band: f64,
     /// At most this many pixel pairs are used per touching pair of pieces (evenly spaced).
     pub pairs_per_boundary: usize,
-    /// Contact evidence of a pair (see `contact_evidence`): flow jump (px) at which the
+    /// Contact evidence of a pair (see `contact::contact_evidence`): flow jump (px) at which the
     /// flow-continuity evidence falls to 1/e.
     pub flow_scale_px: f64,
     /// Smallest contact evidence of a pair (a pair whose flow jumps, unless one piece stands on

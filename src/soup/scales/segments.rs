@@ -95,7 +95,7 @@ pub(super) struct Segments {
     pub(super) resting: Vec<Vec<f64>>,
     /// Whether the static world's ground runs to the near edge of the view
     /// ([`ScaleParams::rest_bottom_share`]): a floor that things stand on, so the world below a
-    /// mover's bottom edge may be floor in front of it (see `segment_pair_terms`).
+    /// mover's bottom edge may be floor in front of it (see `priors::segment_pair_terms`).
     pub(super) floor: bool,
     /// Whether the static world's ground plane was found.
     pub(super) ground: bool,
