@@ -1,10 +1,11 @@
 //! The terms between two rigid segments that the segment solve minimises: their links' contacts
 //! and the figure, ground, rest and static priors (see the parent module, step 2).
+//! Their tests run through the segment solve and live in `segments`.
 
 use super::ScaleParams;
 use super::contact::{Link, Problem};
 use super::minimise::{Step, steps_at, truncated};
-use super::segments::{Segments, is_figure};
+use super::segments::Segments;
 use crate::numeric::weighted_median;
 
 /// The terms between two segments g < h as functions of d = u_g − u_h (segment offsets u,
@@ -212,4 +213,10 @@ fn add_static_prior(pairs: &mut PairTerms, segments: &Segments, weight: f64, max
             .terms
             .push((pull(g), centre[a] - centre[b]));
     }
+}
+
+/// True when segment `g` is the figure against `h` (the smaller of the two, by pieces; the
+/// later one on a tie): the side the figure prior keeps from lying behind.
+fn is_figure(sizes: &[usize], g: usize, h: usize) -> bool {
+    (sizes[g], std::cmp::Reverse(g)) < (sizes[h], std::cmp::Reverse(h))
 }

@@ -511,12 +511,6 @@ fn segment_centres(soup: &Soup, inputs: &ScaleInputs, segment: &[usize], count: 
         .collect()
 }
 
-/// True when segment `g` is the figure against `h` (the smaller of the two, by pieces; the
-/// later one on a tie): the side the figure prior keeps from lying behind.
-pub(super) fn is_figure(sizes: &[usize], g: usize, h: usize) -> bool {
-    (sizes[g], std::cmp::Reverse(g)) < (sizes[h], std::cmp::Reverse(h))
-}
-
 /// Coordinate descent over segment offsets u (log-scale s = centre + u), from three starts;
 /// returns the better u and the sweeps run. Only links between segments depend on u, so the
 /// descent works on [`PairTerms`].
@@ -734,8 +728,8 @@ fn discrete_start(
 
 #[cfg(test)]
 mod tests {
+    use super::super::contact::Link;
     use super::*;
-    use crate::soup::scales::Link;
 
     /// Segments with the given piece-to-segment map, centres and ego-motion flags (a segment on
     /// the ego-motion counts as measured static world).
