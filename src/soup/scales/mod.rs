@@ -94,6 +94,7 @@ use crate::superpixels::graph::BoundaryGraph;
 
 mod confidence;
 mod contact;
+mod descent;
 mod minimise;
 mod priors;
 mod ray_gaps;
@@ -109,7 +110,8 @@ pub use segments::{
 };
 
 use contact::tail_control;
-use segments::{Segments, solve_segments};
+use descent::solve_segments;
+use segments::Segments;
 
 /// Settings of the scale solve. Each value is scale-free and shared by every scene.
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, serde::Deserialize)]
