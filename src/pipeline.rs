@@ -437,12 +437,14 @@ impl Pass {
 /// (flow too coarse to tell the camera's motion from a compromise with the movers) or it found
 /// no ground ([`Params::finer_without_ground`]: flow too coarse for a floor's slopes). Returns the
 /// best pass ([`Pass::improves_on`]; the earliest on a tie), with the notes of every pass in the
-/// order they ran and its stage times summed over all of them. Only one finished pass is held:
-/// an earlier pass better than the later ones is made again at the end (the pipeline is
-/// deterministic), so the memory is
-/// that of one reconstruction and one running pass (the page's budget), plus a copy of frame 1's
-/// superpixels and graphs that the later passes share (they do not depend on the flow; a few
-/// bytes per pixel). A later pass that fails leaves the best one so far, with a note.
+/// order they ran and its stage times summed over all of them. While a finer pass runs, the best
+/// one so far waits set aside ([`Held`]): its superpixels and graphs, which the later passes
+/// share (they do not depend on the flow), and its flow, trust mask, soups and report, without
+/// the depth maps and frame it makes again if kept. So the memory is that of one running pass
+/// (the page's budget) plus about 9 bytes per pixel, and an earlier pass that stays the best is
+/// not computed again. A best pass whose camera motion is ambiguous keeps only its superpixels
+/// and graphs: any finer pass replaces it, so it is made again only where every later pass
+/// fails. A later pass that fails leaves the best one so far, with a note.
 fn reconstruct_until_pinned(
     pair: &FramePair,
     first: FlowParams,
@@ -450,13 +452,11 @@ fn reconstruct_until_pinned(
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
     let first_pass = reconstruct_from(pair, FlowInput::Compute(first), params, None, progress)?;
-    // Frame 1's superpixels do not depend on the flow: later passes share the first one's.
-    let mut shared: Option<Segmentation> = None;
     let mut best = Pass::of(&first_pass, first);
     let mut last = best;
     let mut notes = first_pass.report.notes.clone();
     let mut spent = first_pass.report.timings_ms.clone();
-    let mut held = Some(first_pass);
+    let mut held = Held::Whole(Box::new(first_pass));
     while let Some(finer) =
         (last.used.finer()).filter(|_| last.wants_finer(params.min_pinned_share))
     {
@@ -465,16 +465,12 @@ fn reconstruct_until_pinned(
             last.why_finer(),
             preset_name(&finer),
         ));
-        if shared.is_none() {
-            shared = held.as_ref().map(Segmentation::of);
-        }
-        // One finished pass at a time: the best one so far is made again if it stays the best.
-        held = None;
+        held = held.set_aside(!best.ambiguous);
         match reconstruct_from(
             pair,
             FlowInput::Compute(finer),
             params,
-            shared.as_ref(),
+            held.segmentation(),
             progress,
         ) {
             Ok(again) => {
@@ -482,7 +478,7 @@ fn reconstruct_until_pinned(
                 spent.extend_from_slice(&again.report.timings_ms);
                 last = Pass::of(&again, finer);
                 if last.improves_on(&best) {
-                    (best, held) = (last, Some(again));
+                    (best, held) = (last, Held::Whole(Box::new(again)));
                 }
             }
             Err(e) => {
@@ -495,21 +491,28 @@ fn reconstruct_until_pinned(
         }
     }
     let mut kept = match held {
-        Some(rec) => rec,
-        None => {
+        Held::Whole(rec) => *rec,
+        Held::Aside(aside) => {
             notes.push(format!(
-                "kept the reconstruction from preset {} ({:.0} % pinned; {:.0} % with preset {}), \
-                 made again",
+                "kept the reconstruction from preset {} ({:.0} % pinned; {:.0} % with preset {})",
                 preset_name(&best.used),
                 100.0 * best.pinned,
                 100.0 * last.pinned,
                 preset_name(&last.used),
             ));
+            aside.restore(pair)
+        }
+        Held::Dropped(segmentation) => {
+            notes.push(format!(
+                "kept the reconstruction from preset {} ({:.0} % pinned), made again",
+                preset_name(&best.used),
+                100.0 * best.pinned,
+            ));
             let again = reconstruct_from(
                 pair,
                 FlowInput::Compute(best.asked),
                 params,
-                shared.as_ref(),
+                Some(&segmentation),
                 progress,
             )?;
             spent.extend_from_slice(&again.report.timings_ms);
@@ -520,6 +523,123 @@ fn reconstruct_until_pinned(
     kept.report.notes = notes;
     kept.report.timings_ms = summed_by_stage(&spent);
     Ok(kept)
+}
+
+/// The best pass of [`reconstruct_until_pinned`] so far.
+enum Held {
+    /// As its pass returned it.
+    Whole(Box<Reconstruction>),
+    /// Set aside while a finer pass runs.
+    Aside(Box<SetAside>),
+    /// Only its superpixels and graphs, while a finer pass that will replace it runs.
+    Dropped(Box<Segmentation>),
+}
+
+impl Held {
+    /// The pass set aside where it may still be kept (`may_stay`), else dropped but for its
+    /// superpixels and graphs; a pass already set aside or dropped stays as it is.
+    fn set_aside(self, may_stay: bool) -> Held {
+        match self {
+            Held::Whole(rec) if may_stay => Held::Aside(Box::new(SetAside::of(*rec))),
+            Held::Whole(rec) => Held::Dropped(Box::new(SetAside::of(*rec).segmentation)),
+            held => held,
+        }
+    }
+
+    /// The superpixels and graphs of a pass set aside or dropped, for the later passes to share.
+    fn segmentation(&self) -> Option<&Segmentation> {
+        match self {
+            Held::Whole(_) => None,
+            Held::Aside(aside) => Some(&aside.segmentation),
+            Held::Dropped(segmentation) => Some(segmentation),
+        }
+    }
+}
+
+/// A [`Reconstruction`] without what its soup and frame 1 make again in milliseconds: its
+/// frame-1 depth at both resolutions and the frame itself (at 1024 × 768, 9 of its 31 MB).
+struct SetAside {
+    segmentation: Segmentation,
+    flow: FlowField,
+    reliable: Grid<bool>,
+    unit_soup: Soup,
+    scaled_soup: Soup,
+    refined_soup: Soup,
+    soup: Soup,
+    report: Report,
+}
+
+impl SetAside {
+    /// `rec` set aside.
+    fn of(rec: Reconstruction) -> Self {
+        let Reconstruction {
+            flow,
+            reliable,
+            superpixels,
+            boundaries,
+            knn,
+            unit_soup,
+            scaled_soup,
+            refined_soup,
+            soup,
+            report,
+            depth: _,
+            depth_input: _,
+            frame1: _,
+        } = rec;
+        SetAside {
+            segmentation: Segmentation {
+                superpixels,
+                boundaries,
+                knn,
+            },
+            flow,
+            reliable,
+            unit_soup,
+            scaled_soup,
+            refined_soup,
+            soup,
+            report,
+        }
+    }
+
+    /// The reconstruction again, its depth maps made from its soup as its pass made them, and
+    /// frame 1 from `pair` (the pair it was made from).
+    fn restore(self, pair: &FramePair) -> Reconstruction {
+        let SetAside {
+            segmentation,
+            flow,
+            reliable,
+            unit_soup,
+            scaled_soup,
+            refined_soup,
+            soup,
+            report,
+        } = self;
+        let k = report.camera.intrinsics;
+        let inputs = segmentation.scale_inputs(&flow, &reliable, &k);
+        let (_, depth, depth_input) = outputs(report.input_size, &soup, &inputs, &report.params);
+        let Segmentation {
+            superpixels,
+            boundaries,
+            knn,
+        } = segmentation;
+        Reconstruction {
+            flow,
+            reliable,
+            superpixels,
+            boundaries,
+            knn,
+            unit_soup,
+            scaled_soup,
+            refined_soup,
+            soup,
+            depth,
+            depth_input,
+            frame1: pair.frame1.clone(),
+            report,
+        }
+    }
 }
 
 /// A note for the report when the kept pass's camera motion, whose rival is `rival`, is
@@ -604,15 +724,6 @@ impl Segmentation {
             flow,
             reliable,
             intrinsics: k,
-        }
-    }
-
-    /// A copy of `rec`'s.
-    fn of(rec: &Reconstruction) -> Self {
-        Segmentation {
-            superpixels: rec.superpixels.clone(),
-            boundaries: rec.boundaries.clone(),
-            knn: rec.knn.clone(),
         }
     }
 }
