@@ -438,13 +438,13 @@ impl Pass {
 /// no ground ([`Params::finer_without_ground`]: flow too coarse for a floor's slopes). Returns the
 /// best pass ([`Pass::improves_on`]; the earliest on a tie), with the notes of every pass in the
 /// order they ran and its stage times summed over all of them. While a finer pass runs, the best
-/// one so far waits set aside ([`Held`]): its superpixels and graphs, which the later passes
-/// share (they do not depend on the flow), and its flow, trust mask, soups and report, without
-/// the depth maps and frame it makes again if kept. So the memory is that of one running pass
-/// (the page's budget) plus about 9 bytes per pixel, and an earlier pass that stays the best is
-/// not computed again. A best pass whose camera motion is ambiguous keeps only its superpixels
-/// and graphs: any finer pass replaces it, so it is made again only where every later pass
-/// fails. A later pass that fails leaves the best one so far, with a note.
+/// one so far waits set aside ([`SetAside`]): its superpixels and graphs, which the later passes
+/// share (they do not depend on the flow), its soups and its report. If it stays the best, its
+/// flow is computed again and its depth made from its soup; its motions, scales and refinement
+/// are not. So the memory is that of one running pass (the page's budget) plus the soups. A best
+/// pass whose camera motion is ambiguous keeps only its superpixels and graphs: any finer pass
+/// replaces it, so it is made again whole only where every later pass fails. A later pass that
+/// fails leaves the best one so far, with a note.
 fn reconstruct_until_pinned(
     pair: &FramePair,
     first: FlowParams,
@@ -500,7 +500,7 @@ fn reconstruct_until_pinned(
                 100.0 * last.pinned,
                 preset_name(&last.used),
             ));
-            aside.restore(pair)
+            aside.restore(pair, &mut spent, progress)?
         }
         Held::Dropped(segmentation) => {
             notes.push(format!(
@@ -556,12 +556,12 @@ impl Held {
     }
 }
 
-/// A [`Reconstruction`] without what its soup and frame 1 make again in milliseconds: its
-/// frame-1 depth at both resolutions and the frame itself (at 1024 × 768, 9 of its 31 MB).
+/// A [`Reconstruction`] without its flow, trust mask, depth maps and frame: its superpixels and
+/// graphs (which the later passes share), soups and report. The flow is the one large array
+/// that is expensive to make again; kept, it would add 9 bytes per pixel to the peak of the
+/// finer pass's flow (7 MB at 1024 × 768, where the page's crowd already reaches its 400 MiB).
 struct SetAside {
     segmentation: Segmentation,
-    flow: FlowField,
-    reliable: Grid<bool>,
     unit_soup: Soup,
     scaled_soup: Soup,
     refined_soup: Soup,
@@ -573,8 +573,6 @@ impl SetAside {
     /// `rec` set aside.
     fn of(rec: Reconstruction) -> Self {
         let Reconstruction {
-            flow,
-            reliable,
             superpixels,
             boundaries,
             knn,
@@ -583,6 +581,8 @@ impl SetAside {
             refined_soup,
             soup,
             report,
+            flow: _,
+            reliable: _,
             depth: _,
             depth_input: _,
             frame1: _,
@@ -593,8 +593,6 @@ impl SetAside {
                 boundaries,
                 knn,
             },
-            flow,
-            reliable,
             unit_soup,
             scaled_soup,
             refined_soup,
@@ -603,28 +601,49 @@ impl SetAside {
         }
     }
 
-    /// The reconstruction again, its depth maps made from its soup as its pass made them, and
-    /// frame 1 from `pair` (the pair it was made from).
-    fn restore(self, pair: &FramePair) -> Reconstruction {
+    /// The reconstruction again, from `pair` (the pair it was made from): its flow computed
+    /// again with the parameters it used (deterministic, so the same flow and trust mask), its
+    /// depth maps made from its soup as its pass made them. The stages' times go to `spent`.
+    fn restore(
+        self,
+        pair: &FramePair,
+        spent: &mut Vec<(Stage, f64)>,
+        progress: &mut dyn FnMut(Stage, f32),
+    ) -> Result<Reconstruction> {
         let SetAside {
             segmentation,
-            flow,
-            reliable,
             unit_soup,
             scaled_soup,
             refined_soup,
             soup,
             report,
         } = self;
+        let mut clock = Clock::start();
+        progress(Stage::Flow, 0.0);
+        let used = report.flow.ok_or_else(|| {
+            Error::InvalidParameter("a pass set aside had no computed flow".into())
+        })?;
+        let FlowPair {
+            forward: flow,
+            reliable,
+            ..
+        } = compute_flow(&pair.frame1, &pair.frame2, &used, &mut |f| {
+            progress(Stage::Flow, f)
+        })?;
+        clock.lap(Stage::Flow);
+        progress(Stage::Outputs, 0.0);
         let k = report.camera.intrinsics;
         let inputs = segmentation.scale_inputs(&flow, &reliable, &k);
         let (_, depth, depth_input) = outputs(report.input_size, &soup, &inputs, &report.params);
+        clock.lap(Stage::Outputs);
+        progress(Stage::Outputs, 1.0);
+        spent.extend_from_slice(&clock.laps);
         let Segmentation {
             superpixels,
             boundaries,
             knn,
         } = segmentation;
-        Reconstruction {
+        Ok(Reconstruction {
             flow,
             reliable,
             superpixels,
@@ -638,7 +657,7 @@ impl SetAside {
             depth_input,
             frame1: pair.frame1.clone(),
             report,
-        }
+        })
     }
 }
 

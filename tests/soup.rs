@@ -658,6 +658,58 @@ fn a_reconstruction_that_pins_too_little_is_made_again_from_finer_flow() {
 }
 
 #[test]
+fn an_earlier_pass_kept_after_finer_ones_is_the_pass_made_alone() {
+    use superpixel_soup::flow::{FlowParams, Preset};
+    use superpixel_soup::pipeline::Stage;
+    // The crowd at 320x136 with 100 superpixels and one member: preset fast's pass finds no
+    // ground and pins 83 % of the image; medium's and high's find none either and pin less, so
+    // fast's is kept. It waited set aside (its superpixels, soups and report) while they ran:
+    // its flow is computed again and its depth made from its soup, not its whole pass.
+    let s = render(SceneKind::Crowd, 320, 136).unwrap();
+    let pair = pair_of(&s.frame1, &s.frame2, s.intrinsics);
+    let fast = FlowInput::Compute(FlowParams::preset(Preset::Fast));
+    let mut params = small_run(0.0, 0.0);
+    params.finer_without_ground = true;
+    params.ensemble.members = 1;
+    let mut stages = Vec::new();
+    let kept = reconstruct(&pair, fast.clone(), &params, &mut |stage, _| {
+        if stages.last() != Some(&stage) {
+            stages.push(stage);
+        }
+    })
+    .unwrap();
+    let notes = &kept.report.notes;
+    assert_eq!(kept.report.flow.unwrap().named_preset(), Some(Preset::Fast));
+    assert!(
+        notes.len() == 3
+            && notes[2].starts_with("kept the reconstruction from preset fast")
+            && !notes[2].contains("made again"),
+        "{notes:?}"
+    );
+    // Three whole passes, then the kept one's flow and outputs again.
+    let pass = &Stage::ALL[..Stage::ALL.len() - 1];
+    let whole: Vec<Stage> = pass.repeat(3);
+    assert_eq!(stages[..whole.len()], whole[..], "{stages:?}");
+    assert_eq!(
+        stages[whole.len()..whole.len() + 2],
+        [Stage::Flow, Stage::Outputs],
+        "{stages:?}"
+    );
+    // The same as preset fast's pass made alone, bit for bit.
+    params.finer_without_ground = false;
+    let alone = reconstruct(&pair, fast, &params, &mut |_, _| {}).unwrap();
+    assert!(alone.report.notes.is_empty(), "{:?}", alone.report.notes);
+    assert_eq!(depth_bits(&kept), depth_bits(&alone));
+    assert_eq!(kept.flow.data(), alone.flow.data());
+    assert_eq!(kept.reliable.data(), alone.reliable.data());
+    assert_eq!(kept.report.confidence, alone.report.confidence);
+    assert_eq!(
+        (kept.depth_input.data().iter().map(|z| z.to_bits())).collect::<Vec<_>>(),
+        (alone.depth_input.data().iter().map(|z| z.to_bits())).collect::<Vec<_>>()
+    );
+}
+
+#[test]
 fn the_page_s_flow_preset_beats_a_constant_depth_on_the_crowd() {
     // With the page's preset (medium, half-resolution flow) at 1500 superpixels a motion
     // 8.9 degrees from the camera's explains the image within 0.6 %: the camera's motion is
