@@ -3,7 +3,7 @@
 // parameters, the time of each pipeline stage in the worker, and the peak memory of the tab;
 // plus how fast the page and its worker load.
 //
-//   node benches/page.mjs [--runs 3] [--no-loading] [--scene street]
+//   node benches/page.mjs [--runs 3] [--no-loading] [--scene street] [--pair DIR]
 //
 // Needs the release wasm in www/pkg (scripts/build-web.sh); builds the `soup` CLI (release) to
 // render the inputs with `soup synth`:
@@ -15,6 +15,8 @@
 // `--no-loading` skips the page-load rows (the memory and end-to-end rows only). `--scene` renders
 // another synthetic scene instead of the street (`soup synth --help` lists them; the crowd, whose
 // first pass with the page's flow pins too few scales, shows what a second pass costs).
+// `--pair DIR` benches DIR's frame1.png and frame2.png instead (a pair of any size, for
+// example one of ../shared/eval's, as a person would pick them), and nothing else.
 // Each run uses a fresh browser. The photos are picked as files on disk, as a person picks them
 // (Playwright given buffers instead passes them through the page's JavaScript heap as base64:
 // about 100 MiB of garbage in the renderer for the 24 MP pair). Times are the minimum over runs;
@@ -40,6 +42,7 @@ const { values } = parseArgs({
     runs: { type: 'string', default: '3' },
     'no-loading': { type: 'boolean', default: false },
     scene: { type: 'string', default: 'street' },
+    pair: { type: 'string' },
   },
 });
 const runs = Number(values.runs);
@@ -55,9 +58,12 @@ const soup = (...args) => {
     throw new Error(`soup ${args.join(' ')} failed`);
   }
 };
-soup('synth', path.join(work, 'small'), '--scene', scene, '--size', '1024x436');
-soup('synth', path.join(work, 'photo'), '--scene', scene, '--size', '1008x756');
-soup('synth', path.join(work, 'photo24'), '--scene', scene, '--size', '1500x1000');
+const pair = values.pair;
+if (pair === undefined) {
+  soup('synth', path.join(work, 'small'), '--scene', scene, '--size', '1024x436');
+  soup('synth', path.join(work, 'photo'), '--scene', scene, '--size', '1008x756');
+  soup('synth', path.join(work, 'photo24'), '--scene', scene, '--size', '1500x1000');
+}
 const png = (dir, name) => readFileSync(path.join(work, dir, scene, name));
 
 const server = await startServer();
@@ -204,10 +210,11 @@ const max = (xs) => Math.max(...xs);
 const rows = [];
 const stageRows = [];
 try {
-  const cases = [
-    [`1024×436 PNG pair (${scene})`, ['frame1.png', 'frame2.png'].map((name) => path.join(work, 'small', scene, name))],
-  ];
-  {
+  const cases = [];
+  if (pair !== undefined) {
+    cases.push([`PNG pair ${path.basename(pair)}`, ['frame1.png', 'frame2.png'].map((name) => path.join(pair, name))]);
+  } else {
+    cases.push([`1024×436 PNG pair (${scene})`, ['frame1.png', 'frame2.png'].map((name) => path.join(work, 'small', scene, name))]);
     const browser = await launchBrowser();
     const page = await browser.newPage();
     await page.goto(`${server.url}www/favicon.svg`);
