@@ -15,8 +15,8 @@
 // `--no-loading` skips the page-load rows (the memory and end-to-end rows only). `--scene` renders
 // another synthetic scene instead of the street (`soup synth --help` lists them; the crowd, whose
 // first pass with the page's flow pins too few scales, shows what a second pass costs).
-// `--pair DIR` benches DIR's frame1.png and frame2.png instead (a pair of any size, for
-// example one of ../shared/eval's, as a person would pick them), and nothing else.
+// `--pair DIR` benches DIR's frame1.png and frame2.png instead of the synthetic inputs (a pair
+// of any size, for example one of ../shared/eval's, as a person would pick them).
 // Each run uses a fresh browser. The photos are picked as files on disk, as a person picks them
 // (Playwright given buffers instead passes them through the page's JavaScript heap as base64:
 // about 100 MiB of garbage in the renderer for the 24 MP pair). Times are the minimum over runs;

@@ -282,8 +282,10 @@ impl Reconstruction {
 /// ([`InitParams::ambiguous_ego_excess`]) or whose scale solve finds no ground plane
 /// ([`Params::finer_without_ground`]), is made again from the flow of the next finer preset,
 /// and the best pass is kept: a finer pass replaces an ambiguous one and one without a ground
-/// where it finds one, and otherwise the larger pinned share wins (the stages report their progress again from
-/// the flow on; notes say what happened, and the stage times are summed over the passes).
+/// where it finds one, and otherwise the larger pinned share wins (each finer pass reports its
+/// stages' progress again from the flow on, and an earlier pass kept after them its flow,
+/// computed again, within the outputs stage; notes say what happened, and the stage times are
+/// summed over the passes).
 /// The kept pass is then fused with its members ([`Stage::Ensemble`], last: see
 /// [`crate::soup::ensemble`]), once, and its depth and confidence are made again from the fused
 /// soup. Natively the members run on up to four threads (see `solve_members`); everything else
@@ -441,7 +443,9 @@ impl Pass {
 /// one so far waits set aside ([`SetAside`]): its superpixels and graphs, which the later passes
 /// share (they do not depend on the flow), its soups and its report. If it stays the best, its
 /// flow is computed again and its depth made from its soup; its motions, scales and refinement
-/// are not. So the memory is that of one running pass (the page's budget) plus the soups. A best
+/// are not. So the memory is that of one running pass (the page's budget) plus the set-aside
+/// pass's superpixels, graphs and soups (the superpixels and graphs were held before too, as
+/// the copy the later passes shared). A best
 /// pass whose camera motion is ambiguous keeps only its superpixels and graphs: any finer pass
 /// replaces it, so it is made again whole only where every later pass fails. A later pass that
 /// fails leaves the best one so far, with a note.
@@ -556,6 +560,11 @@ impl Held {
     }
 }
 
+/// The share of the outputs stage's progress that a pass set aside and kept gives to computing
+/// its flow again ([`SetAside::restore`]): the flow takes most of its time (medium's flow
+/// 188 ms against 7 ms for the depth and clouds natively).
+const RESTORED_FLOW_SHARE: f32 = 0.9;
+
 /// A [`Reconstruction`] without its flow, trust mask, depth maps and frame: its superpixels and
 /// graphs (which the later passes share), soups and report. The flow is the one large array
 /// that is expensive to make again; kept, it would add 9 bytes per pixel to the peak of the
@@ -603,7 +612,9 @@ impl SetAside {
 
     /// The reconstruction again, from `pair` (the pair it was made from): its flow computed
     /// again with the parameters it used (deterministic, so the same flow and trust mask), its
-    /// depth maps made from its soup as its pass made them. The stages' times go to `spent`.
+    /// depth maps made from its soup as its pass made them. The stages' times go to `spent`;
+    /// `progress` hears of it all as [`Stage::Outputs`] (the flow's share first), since no new
+    /// pass starts (the page's progress bar counts a return to the flow as one).
     fn restore(
         self,
         pair: &FramePair,
@@ -619,7 +630,7 @@ impl SetAside {
             report,
         } = self;
         let mut clock = Clock::start();
-        progress(Stage::Flow, 0.0);
+        progress(Stage::Outputs, 0.0);
         let used = report.flow.ok_or_else(|| {
             Error::InvalidParameter("a pass set aside had no computed flow".into())
         })?;
@@ -628,10 +639,9 @@ impl SetAside {
             reliable,
             ..
         } = compute_flow(&pair.frame1, &pair.frame2, &used, &mut |f| {
-            progress(Stage::Flow, f)
+            progress(Stage::Outputs, RESTORED_FLOW_SHARE * f)
         })?;
         clock.lap(Stage::Flow);
-        progress(Stage::Outputs, 0.0);
         let k = report.camera.intrinsics;
         let inputs = segmentation.scale_inputs(&flow, &reliable, &k);
         let (_, depth, depth_input) = outputs(report.input_size, &soup, &inputs, &report.params);
