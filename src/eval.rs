@@ -537,6 +537,7 @@ mod tests {
             hypotheses: Vec::new(),
             noise_px: 0.0,
             ego_rival: None,
+            rugged_to_ego: 0,
         };
         let states = true_states(&soup, &labels, &depth1, &flow, &depth12, &k).unwrap();
         for (piece, (r, t)) in states.pieces.iter().zip(&motions) {

@@ -185,6 +185,7 @@ mod tests {
             hypotheses: Vec::new(),
             noise_px: 0.0,
             ego_rival: None,
+            rugged_to_ego: 0,
         };
         (soup, Grid::from_fn(6, 2, |x, _| (x / 2) as u32))
     }

@@ -179,6 +179,9 @@ pub struct Report {
     /// The strongest rival of the camera's motion (a candidate far from it that explains the
     /// image nearly as well; [`EgoRival`]); `None` when no candidate lay far from it.
     pub ego_rival: Option<EgoRival>,
+    /// Superpixels given the camera's motion because their own hypothesis made their surface
+    /// rugged (a rigid motion fitted to part of a bending body; `init.rugged_ratio`).
+    pub rugged_to_ego: usize,
     /// The scale solve: energies, rigid segments, pieces moved by tail control.
     pub scales: ScaleReport,
     /// The refinement's energy per iteration (`None` when turned off).
@@ -843,6 +846,7 @@ fn reconstruct_from(
             .count(),
         hypotheses: soup.hypotheses.len(),
         ego_rival: unit_soup.ego_rival,
+        rugged_to_ego: unit_soup.rugged_to_ego,
         scales,
         refine,
         ensemble: None,

@@ -76,6 +76,7 @@ fn two_body_soup(delta: Vector3<f64>) -> (Soup, Superpixels) {
             hypotheses,
             noise_px: 0.0,
             ego_rival: None,
+            rugged_to_ego: 0,
         },
         sp,
     )
@@ -331,11 +332,13 @@ fn computed_flow_flag_street_and_creature_beat_a_constant_depth() {
     // the refinement gave 0.083, 0.138 and 0.222 on the creature (constant: 0.395); with the
     // ego-motion by planes, the static world as one body and the figure prior, 0.192, 0.066 and
     // 0.122, and over 1300–1700 superpixels 0.13–0.22, 0.06–0.07 and 0.11–0.19 (the creature
-    // was 0.18–0.52 before).
+    // was 0.18–0.52 before). The flag's bands, each on a rigid motion fitted to the bending
+    // sheet, exaggerated its folds eightfold (0.072) until such motions went to the camera's
+    // (`init.rugged_ratio`; 0.041).
     let params = Params::default();
     let flow = superpixel_soup::flow::FlowParams::default();
     for (kind, bound) in [
-        (SceneKind::Flag, 0.25),
+        (SceneKind::Flag, 0.05),
         (SceneKind::Street, 0.1),
         (SceneKind::Creature, 0.2),
     ] {
@@ -343,6 +346,7 @@ fn computed_flow_flag_street_and_creature_beat_a_constant_depth() {
         let rec = reconstruct_scene(&s, FlowInput::Compute(flow), &params);
         let m = depth_metrics(&s.depth1, &rec.depth_input).unwrap();
         let floor = constant_depth_mre(&s);
+        println!("{}: MRE {:.4}", kind.name(), m.mre);
         assert!(
             m.mre < bound && m.mre < floor,
             "{}: MRE {} (bound {bound}, constant depth {floor})",

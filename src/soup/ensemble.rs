@@ -268,6 +268,7 @@ mod tests {
             hypotheses: Vec::new(),
             noise_px: 0.1,
             ego_rival: None,
+            rugged_to_ego: 0,
         };
         let labels = Grid::from_fn(10 * n, 20, |x, _| (x / 10) as u32);
         (soup, labels)

@@ -385,6 +385,7 @@ mod tests {
             hypotheses: Vec::new(),
             noise_px: 0.0,
             ego_rival: None,
+            rugged_to_ego: 0,
         };
         (soup, Superpixels { labels, segments })
     }

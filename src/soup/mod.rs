@@ -79,4 +79,8 @@ pub struct Soup {
     /// The strongest rival of the camera's motion (hypothesis 0) that the unit-scale soup
     /// found (`None` when there was none, or for soups not made by it).
     pub ego_rival: Option<init::EgoRival>,
+    /// Superpixels the unit-scale soup gave the camera's motion because their own hypothesis
+    /// made their surface rugged (`init.rugged_ratio`: a rigid motion fitted to part of a
+    /// bending body); 0 for soups not made by it.
+    pub rugged_to_ego: usize,
 }

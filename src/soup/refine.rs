@@ -844,6 +844,7 @@ mod tests {
             hypotheses: Vec::new(),
             noise_px: 0.0,
             ego_rival: None,
+            rugged_to_ego: 0,
         };
         let terms = problem.energy_terms(&soup);
         let sum = terms.proj + terms.contacts + terms.ground;
@@ -921,6 +922,7 @@ mod tests {
             hypotheses: Vec::new(),
             noise_px: 0.1,
             ego_rival: None,
+            rugged_to_ego: 0,
         };
         (soup, problem)
     }

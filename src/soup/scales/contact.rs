@@ -517,6 +517,7 @@ mod tests {
                 hypotheses: Vec::new(),
                 noise_px: 0.0,
                 ego_rival: None,
+                rugged_to_ego: 0,
             };
             let edge = BoundaryEdge {
                 a: 0,
