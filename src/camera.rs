@@ -39,8 +39,8 @@ impl std::fmt::Display for IntrinsicsSource {
 }
 
 impl Intrinsics {
-    /// The fallback guess for a `width × height` image: fx = fy = max(W, H), centre W/2 − 0.5, H/2 − 0.5
-    /// (a horizontal field of view of about 53° on the long side).
+    /// The fallback guess for a `width × height` image: fx = fy = max(W, H), centre
+    /// W/2 − 0.5, H/2 − 0.5 (a horizontal field of view of about 53° on the long side).
     pub fn default_for(width: usize, height: usize) -> Self {
         let f = width.max(height) as f64;
         Intrinsics {

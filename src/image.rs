@@ -13,7 +13,8 @@ pub type Frame = Grid<[u8; 3]>;
 #[derive(Clone, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "camelCase", default)]
 pub struct ExifInfo {
-    /// 35 mm-equivalent focal length in millimetres (`FocalLengthIn35mmFilm`), when present and positive.
+    /// 35 mm-equivalent focal length in millimetres (`FocalLengthIn35mmFilm`), when present and
+    /// positive.
     pub focal_35mm: Option<f64>,
     /// Why EXIF could not be used although the file has some (corrupt block, unreadable tag).
     /// The image itself still loads; intrinsics then fall back to the default.

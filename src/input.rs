@@ -6,7 +6,8 @@ use crate::camera::{Camera, Intrinsics, resolve_intrinsics};
 use crate::error::{Error, Result};
 use crate::image::{Frame, LoadedImage, resize, working_size};
 
-/// The smallest side (pixels) the pipeline accepts: below this flow and superpixels have nothing to work on.
+/// The smallest side (pixels) the pipeline accepts: below this flow and superpixels have nothing to
+/// work on.
 pub const MIN_SIDE: usize = 32;
 
 /// Default bound on the long side of the working resolution, in pixels.

@@ -951,11 +951,11 @@ pub fn member_vote(seen: Observed, params: &Params, count: usize) -> Result<Vote
 }
 
 /// Finishes a reconstruction of [`reconstruct_unfused`], once, with the parameters it was made
-/// with: moves each piece of its soup to the weighted median scale of its own vote and the members' (`made`: one per
-/// [`member_counts`], in their order; an `Err` holds why that member could not be made, and it
-/// is left out with a note in the report, as is a member `made` lacks), then makes its depth,
-/// confidence and report again from the fused soup. `members_ms` is the time the members took,
-/// added to the [`Stage::Ensemble`] time with the fusion's own. With no members
+/// with: moves each piece of its soup to the weighted median scale of its own vote and the members'
+/// (`made`: one per [`member_counts`], in their order; an `Err` holds why that member could not be
+/// made, and it is left out with a note in the report, as is a member `made` lacks), then makes its
+/// depth, confidence and report again from the fused soup. `members_ms` is the time the members
+/// took, added to the [`Stage::Ensemble`] time with the fusion's own. With no members
 /// (`ensemble.members` 1) only that time is recorded.
 pub fn fuse_votes(
     rec: &mut Reconstruction,

@@ -1,10 +1,11 @@
 //! The same depth on every platform. The pipeline's discrete choices (RANSAC samples, motion
 //! assignment, scale search, particle labelling) amplify a difference in the last bit of any
-//! arithmetic: once, glibc's and wasm's `ln` disagreed and the page's crowd came out at MRE
-//! 1.281 while the command line gave 0.264. So every result's maths comes from the libm crate
+//! arithmetic: once, glibc's and wasm's `ln` disagreed and the page's crowd came out at MRE 1.281
+//! while the command line gave 0.264. So every result's maths comes from the libm crate
 //! (clippy.toml), and this test pins it: one small dynamic scene (the waving flag), reconstructed
-//! with computed flow, must give the depth whose digest is [`EXPECTED_DIGEST`], natively (`cargo test`) and in
-//! the browser's wasm (`cargo test --target wasm32-unknown-unknown`, as ./check.sh runs it).
+//! with computed flow, must give the depth whose digest is [`EXPECTED_DIGEST`], natively
+//! (`cargo test`) and in the browser's wasm (`cargo test --target wasm32-unknown-unknown`, as
+//! ./check.sh runs it).
 //!
 //! When a change to the pipeline changes its results on purpose, both runs fail with the same
 //! new digest: put it in [`EXPECTED_DIGEST`]. When only one of them fails, the platforms

@@ -167,9 +167,9 @@ const DIS_SHARE: f32 = 0.8;
 /// Dense flow frame 1 → 2 and 2 → 1 with the forward–backward mask. `progress` gets the share of
 /// the work done, in [0, 1].
 ///
-/// Errors: [`Error::SizeMismatch`] when the frames differ in size, [`Error::TooSmall`] when a
-/// side is shorter than a patch (8 pixels), [`Error::InvalidParameter`] for invalid parameters. Identical
-/// frames give zero flow; textureless frames give a finite (zero) field.
+/// Errors: [`Error::SizeMismatch`] when the frames differ in size, [`Error::TooSmall`] when a side
+/// is shorter than a patch (8 pixels), [`Error::InvalidParameter`] for invalid parameters.
+/// Identical frames give zero flow; textureless frames give a finite (zero) field.
 pub fn compute_flow(
     frame1: &Frame,
     frame2: &Frame,

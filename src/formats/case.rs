@@ -1,11 +1,10 @@
-//! The evaluation case layout (the public cases [`crate::eval::eval_case_dir`] finds are in it,
-//! and `soup synth` writes it): a folder holding
-//! `frame1.png`, `frame2.png`, optional `intrinsics.txt` (`fx fy cx cy`), `depth1.pfm`
-//! (z-depth of frame 1, NaN = unknown; or `depth1.dpt`, MPI Sintel's format) and `flow12.flo`. Our synthetic scenes add
-//! `depth12.pfm` (z-depth in camera 2 of frame 1's surface point at each frame-1 pixel: with
-//! `depth1` and `flow12` the scene flow), `moving1.png` (255 where the surface moves in the
-//! world) and `groups1.png` (motion group per pixel: 0 = static world, 1.. = each independent
-//! motion).
+//! The evaluation case layout (the public cases [`crate::eval::eval_case_dir`] finds are in it, and
+//! `soup synth` writes it): a folder holding `frame1.png`, `frame2.png`, optional `intrinsics.txt`
+//! (`fx fy cx cy`), `depth1.pfm` (z-depth of frame 1, NaN = unknown; or `depth1.dpt`, MPI Sintel's
+//! format) and `flow12.flo`. Our synthetic scenes add `depth12.pfm` (z-depth in camera 2 of frame
+//! 1's surface point at each frame-1 pixel: with `depth1` and `flow12` the scene flow),
+//! `moving1.png` (255 where the surface moves in the world) and `groups1.png` (motion group per
+//! pixel: 0 = static world, 1.. = each independent motion).
 
 use std::path::{Path, PathBuf};
 

@@ -1,8 +1,8 @@
 //! 16-bit greyscale PNG for depth maps and superpixel labels.
 //!
 //! Depth: each pixel stores `round(z / scale)` with 0 meaning unknown; the scale (scene units per
-//! step) is written in the PNG `tEXt` chunk `depth_scale`, so z = value × scale. The scale is chosen
-//! so the farthest depth maps to 65535, giving the finest steps the range allows.
+//! step) is written in the PNG `tEXt` chunk `depth_scale`, so z = value × scale. The scale is
+//! chosen so the farthest depth maps to 65535, giving the finest steps the range allows.
 
 use std::io::Cursor;
 

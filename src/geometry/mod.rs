@@ -1,7 +1,7 @@
 //! Two-view geometry on normalised image coordinates x̄ = K⁻¹ [u, v, 1]ᵀ (so every function here
 //! is independent of the intrinsics):
-//! - [`essential`]: the normalised 8-point essential matrix, its decomposition into (R, t̂) with the
-//!   cheirality test, and the Sampson error;
+//! - [`essential`]: the normalised 8-point essential matrix, its decomposition into (R, t̂) with
+//!   the cheirality test, and the Sampson error;
 //! - [`five_point`]: the minimal five-point essential matrix (also valid for planar points);
 //! - [`homography`]: plane-induced homographies (normalised DLT) and their decomposition into
 //!   motion and plane;

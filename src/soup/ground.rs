@@ -262,15 +262,14 @@ fn gaps_under<'a>(
         })
 }
 
-/// Where piece `i` rests on the ground: for each of its pixels p whose pixel below (p + width,
-/// so any pixel on the piece's lower boundary, not only its bottom row)
-/// belongs to another piece of the static world (`world`) that lies on `ground` there (within
-/// `ON_PLANE_LOG_GAP`), ln z̄_i(p) − ln z̄_G(p): the log-depth of the piece's plane over that
-/// of the ground on the ray of p (the pixel's centre, half a pixel above the contact: 0.004 in
-/// log-depth at the crowd's feet, more just below the horizon), at equal scale (unit-scale planes, like
-/// [`depth_below_ground`]). At log-scale s_i the piece's bottom then lies that much plus
-/// s_i − s_G behind the ground it rests on. Empty for a piece with fewer than
-/// [`MIN_RESTING_PIXELS`] such pixels.
+/// Where piece `i` rests on the ground: for each of its pixels p whose pixel below (p + width, so
+/// any pixel on the piece's lower boundary, not only its bottom row) belongs to another piece of
+/// the static world (`world`) that lies on `ground` there (within `ON_PLANE_LOG_GAP`), ln z̄_i(p) −
+/// ln z̄_G(p): the log-depth of the piece's plane over that of the ground on the ray of p (the
+/// pixel's centre, half a pixel above the contact: 0.004 in log-depth at the crowd's feet, more
+/// just below the horizon), at equal scale (unit-scale planes, like [`depth_below_ground`]). At
+/// log-scale s_i the piece's bottom then lies that much plus s_i − s_G behind the ground it rests
+/// on. Empty for a piece with fewer than [`MIN_RESTING_PIXELS`] such pixels.
 pub fn resting_gaps(
     soup: &Soup,
     superpixels: &Superpixels,

@@ -741,19 +741,19 @@ const EGO_CANDIDATES: usize = 4;
 /// ⌊n / 8⌋-th of its n points, so 8 to 15 of them (superpixels with fewer are left out).
 const EGO_LIGHT_SAMPLES: usize = 8;
 
-/// Candidates for the camera's ego-motion with their planar scores, best first: the ego-motion
-/// is the motion under which the most superpixels are explained as planar patches, scored by
-/// Σ_i min(planar cost_i, 0.5 px) over superpixels (lower is better).
-/// Counting epipolar inliers (RANSAC's usual score) does not find it in a crowd: a point only
-/// has to lie on its epipolar line, and a compromise between the camera and the walkers puts
-/// more points within 1 px of theirs than the true motion does (measured on the synthetic
-/// crowd with exact flow: 79.4 % against 78.8 %), which leaves the static world with distorted
-/// planes. A plane per superpixel is the stronger constraint. Candidates come from five-point
-/// samples, ranked first by epipolar inliers at 1 px (the cheap score); the best
-/// 5 × [`EGO_CANDIDATES`] are scored by planes on 8–15 points per superpixel ([`EGO_LIGHT_SAMPLES`]),
-/// and the best [`EGO_CANDIDATES`] refined (Levenberg–Marquardt on the points of the
-/// superpixels they explain, kept while the full planar score falls). Empty when no sample
-/// gives a motion. The runner-up far from the first is its rival ([`EgoRival`]).
+/// Candidates for the camera's ego-motion with their planar scores, best first: the ego-motion is
+/// the motion under which the most superpixels are explained as planar patches, scored by
+/// Σ_i min(planar cost_i, 0.5 px) over superpixels (lower is better). Counting epipolar inliers
+/// (RANSAC's usual score) does not find it in a crowd: a point only has to lie on its epipolar
+/// line, and a compromise between the camera and the walkers puts more points within 1 px of
+/// theirs than the true motion does (measured on the synthetic crowd with exact flow: 79.4 %
+/// against 78.8 %), which leaves the static world with distorted planes. A plane per superpixel
+/// is the stronger constraint. Candidates come from five-point samples, ranked first by epipolar
+/// inliers at 1 px (the cheap score); the best 5 × [`EGO_CANDIDATES`] are scored by planes on 8–15
+/// points per superpixel ([`EGO_LIGHT_SAMPLES`]), and the best [`EGO_CANDIDATES`] refined
+/// (Levenberg–Marquardt on the points of the superpixels they explain, kept while the full planar
+/// score falls). Empty when no sample gives a motion. The runner-up far from the first is its
+/// rival ([`EgoRival`]).
 fn ego_candidates(
     samples: &[Vec<Correspondence>],
     all: &[Correspondence],

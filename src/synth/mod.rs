@@ -120,7 +120,8 @@ pub struct SynthScene {
     pub visible2: Grid<bool>,
     /// Intrinsics of both frames.
     pub intrinsics: Intrinsics,
-    /// Camera 2 pose relative to camera 1: a static point X (camera-1 frame) is `R X + t` in camera 2.
+    /// Camera 2 pose relative to camera 1: a static point X (camera-1 frame) is `R X + t` in
+    /// camera 2.
     pub camera_motion: RigidMotion,
 }
 

@@ -8,7 +8,7 @@
 //! const score = JSON.parse(result.scoreDepth('depth.pfm', bytes));   // or (name, bytes, pngScale)
 //! score.metrics.mre;                          // also abs_rel, delta_125, coverage, scale, pixels
 //! const rgba = result.errorPicture();         // relative error per pixel, result.width × height
-//! const flow = JSON.parse(result.scoreFlow('flow.flo', bytes));     // { file, metrics: { epe … } }
+//! const flow = JSON.parse(result.scoreFlow('flow.flo', bytes));   // { file, metrics: { epe } }
 //! result.report();                            // now has "ground_truth": { depth, flow }
 //! ```
 //! Errors are `Error`s named as in [`super::reconstruct`] (`FormatError`, `SizeMismatchError`,

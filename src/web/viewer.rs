@@ -5,7 +5,7 @@
 //! ```js
 //! import init, { Viewer } from './pkg/superpixel_soup.js';
 //! await init();
-//! const viewer = await Viewer.create(canvas, { backend: 'auto' }); // rejects with a readable Error
+//! const viewer = await Viewer.create(canvas, { backend: 'auto' }); // rejects: a readable Error
 //! viewer.backend;                                   // "webgpu" or "webgl2"
 //! viewer.setCloud(pos1, pos2, rgb, labels);         // Float32Array ×2, Uint8Array, Uint32Array?
 //! viewer.setMorph(0.5);                             // or viewer.setFrame(2)

@@ -30,7 +30,8 @@ enum Command {
     Flow(flow::Args),
     /// Segment an image into SLIC superpixels (16-bit label PNG, overlay and mean-colour pictures).
     Superpixels(superpixels::Args),
-    /// Reconstruct both frames: depth.pfm, frame1.ply, frame2.ply, flow.flo, labels.png, depth.png, report.json.
+    /// Reconstruct both frames: depth.pfm, frame1.ply, frame2.ply, flow.flo, labels.png, depth.png,
+    /// report.json.
     Reconstruct(reconstruct::Args),
     /// Reconstruct evaluation cases and print MRE, AbsRel, δ<1.25, coverage and time per case.
     Eval(eval::Args),

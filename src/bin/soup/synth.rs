@@ -22,7 +22,8 @@ pub struct Args {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "1024x436", value_parser = parse_size)]
     size: (usize, usize),
-    /// Also write `preview.png` in each scene folder: frame 1, frame 2 and the depth picture stacked.
+    /// Also write `preview.png` in each scene folder: frame 1, frame 2 and the depth picture
+    /// stacked.
     #[arg(long)]
     preview: bool,
 }

@@ -44,43 +44,42 @@
 //!    ([`super::ground`]): those are movers explained by the ego-motion at too large a depth
 //!    (a car driving ahead), so the segments are built a second time with them apart.
 //! 2. *Segment scales* by coordinate descent on E from three starts (a maximum spanning tree of
-//!    the sharpest links; every segment at median depth 1; and TRW-S over offsets on a grid of
-//!    step σ, which moves groups of segments together), each segment moving to the exact
-//!    minimum of its terms (for truncated-linear terms it lies at one of the zero-gap points −c),
-//!    within a band of depth ratios around the largest segment. The lower energy wins. This
-//!    segment energy adds a *figure prior* to E: where two segments part, the smaller one pays,
-//!    per link, `behind_weight` times the cost of breaking all of that link's frame-1 contacts
-//!    (κ σ Σw) for lying more than σ behind the larger one (by the link's weighted-median
-//!    frame-1 gap). Once a mover's contacts break, contact alone leaves its scale free, and
-//!    the solve used to park movers far behind the world (a car 4–70× too far). The prior is a
-//!    statement about movers: it does not bind measured static world (a segment on the
-//!    ego-motion, mostly of pieces whose parallax measures their depth: `measured_share`), since
-//!    a walker splits the background behind it into fragments smaller than itself. At the
-//!    crowd's truth it charged such fragments 18–35 contact units, and the solve placed whole
-//!    walkers 2–4× wrong to spare them. Nor does it act across a mover's bottom edge over the
-//!    static world below the horizon where things stand on a floor (the ground runs to the near
-//!    edge of the view): below a standing thing the floor runs towards the camera, in front of
-//!    it. A weak *static prior* (`static_weight`) ties every
-//!    segment on the ego-motion to the static world's scale instead: the ego-motion explains
-//!    its flow at exactly that scale. Its pull on one segment is capped (`static_max`): a
-//!    large segment apart from the world may be a mover the ego-motion explains at a wrong
-//!    depth, which its contacts must be able to place. Not capped are the floor and the
-//!    fragments that meet the world at equal scale somewhere (a link within `world_gap`,
-//!    directly or through other such fragments): static world that a tight `segment_gap`
-//!    split off, while such a mover meets the world nowhere at the ego-motion's scale. A *ground prior* (`ground_weight`) charges every piece
-//!    outside the static world one broken contact for lying more than σ under its ground. A
-//!    *rest prior* (`rest_weight`) ties every mover whose bottom pixels sit on the ground to
-//!    it, in front as behind: a standing thing touches what it stands on, and its contacts with
-//!    the floor are few and weak (colour edges at the feet). It acts only where the ground runs
-//!    to the near edge of the view (`rest_bottom_share`): among floating things a ground-like
-//!    plane behind them would pull them back onto it.
+//!    the sharpest links; every segment at median depth 1; and TRW-S over offsets on a grid of step
+//!    σ, which moves groups of segments together), each segment moving to the exact minimum of its
+//!    terms (for truncated-linear terms it lies at one of the zero-gap points −c), within a band of
+//!    depth ratios around the largest segment. The lower energy wins. This segment energy adds a
+//!    *figure prior* to E: where two segments part, the smaller one pays, per link, `behind_weight`
+//!    times the cost of breaking all of that link's frame-1 contacts (κ σ Σw) for lying more than σ
+//!    behind the larger one (by the link's weighted-median frame-1 gap). Once a mover's contacts
+//!    break, contact alone leaves its scale free, and the solve used to park movers far behind the
+//!    world (a car 4–70× too far). The prior is a statement about movers: it does not bind measured
+//!    static world (a segment on the ego-motion, mostly of pieces whose parallax measures their
+//!    depth: `measured_share`), since a walker splits the background behind it into fragments
+//!    smaller than itself. At the crowd's truth it charged such fragments 18–35 contact units, and
+//!    the solve placed whole walkers 2–4× wrong to spare them. Nor does it act across a mover's
+//!    bottom edge over the static world below the horizon where things stand on a floor (the ground
+//!    runs to the near edge of the view): below a standing thing the floor runs towards the camera,
+//!    in front of it. A weak *static prior* (`static_weight`) ties every segment on the ego-motion
+//!    to the static world's scale instead: the ego-motion explains its flow at exactly that scale.
+//!    Its pull on one segment is capped (`static_max`): a large segment apart from the world may be
+//!    a mover the ego-motion explains at a wrong depth, which its contacts must be able to place.
+//!    Not capped are the floor and the fragments that meet the world at equal scale somewhere (a
+//!    link within `world_gap`, directly or through other such fragments): static world that a tight
+//!    `segment_gap` split off, while such a mover meets the world nowhere at the ego-motion's
+//!    scale. A *ground prior* (`ground_weight`) charges every piece outside the static world one
+//!    broken contact for lying more than σ under its ground. A *rest prior* (`rest_weight`) ties
+//!    every mover whose bottom pixels sit on the ground to it, in front as behind: a standing thing
+//!    touches what it stands on, and its contacts with the floor are few and weak (colour edges at
+//!    the feet). It acts only where the ground runs to the near edge of the view
+//!    (`rest_bottom_share`): among floating things a ground-like plane behind them would pull them
+//!    back onto it.
 //! 3. *Tail control.* A piece whose depth disagrees with every neighbour in both frames while
 //!    the flow across its boundary is continuous (nothing in the data justifies the depth edge)
 //!    takes the scale that best meets its neighbours. The number of such pieces is reported.
 //!
-//! E is [`Problem::energy`], the contact energy alone (without the figure, static, ground and
-//! rest priors, which act only between segments in step 2); `soup eval --oracle` compares it at the solution and at the
-//! ground truth polished by the same per-piece descent (the "truth test").
+//! E is [`Problem::energy`], the contact energy alone (without the figure, static, ground and rest
+//! priors, which act only between segments in step 2); `soup eval --oracle` compares it at the
+//! solution and at the ground truth polished by the same per-piece descent (the "truth test").
 
 use serde::Serialize;
 
@@ -145,11 +144,11 @@ pub struct ScaleParams {
     /// Smallest contact evidence of a pair (a pair whose flow jumps, unless one piece stands on
     /// the other at an angle).
     pub evidence_floor: f64,
-    /// Weight factor of a pair where the lower piece is ground-like (a plane of its own below
-    /// the camera, its normal within 30° of the camera's downward axis:
-    /// [`super::ground::has_ground_like_plane`], as for the ground plane's candidates) and the upper
-    /// piece stands on it: a standing thing touches what it stands on, while its sides and top
-    /// may or may not touch what is behind them.
+    /// Weight factor of a pair where the lower piece is ground-like (a plane of its own below the
+    /// camera, its normal within 30° of the camera's downward axis:
+    /// [`super::ground::has_ground_like_plane`], as for the ground plane's candidates) and the
+    /// upper piece stands on it: a standing thing touches what it stands on, while its sides and
+    /// top may or may not touch what is behind them.
     pub support_weight: f64,
     /// A piece's scale counts as known when its [`scale_confidence`] is at least this: moving
     /// its rigid segment by 25 % raises the energy of its rim by a tenth of what it would cost
@@ -226,11 +225,11 @@ pub struct ScaleParams {
     /// the street with preset medium from 0.066 to 0.121).
     pub measured_share: f64,
     /// The ground prior: each piece outside the static world that lies (by the median of its
-    /// pixels) more than σ under the ground plane (see `soup::ground`: nothing is seen through
-    /// the floor) costs this many broken contacts (w σ); 0 switches the ground off altogether
-    /// (also the split of sunk pieces from the static world, see `sunk_gap`). 1: a mover of n pieces sunk under the road pays as
-    /// much as n broken contacts, more than the contacts that glued it to the background
-    /// behind it usually save.
+    /// pixels) more than σ under the ground plane (see `soup::ground`: nothing is seen through the
+    /// floor) costs this many broken contacts (w σ); 0 switches the ground off altogether (also the
+    /// split of sunk pieces from the static world, see `sunk_gap`). 1: a mover of n pieces sunk
+    /// under the road pays as much as n broken contacts, more than the contacts that glued it to
+    /// the background behind it usually save.
     pub ground_weight: f64,
     /// The ground plane is trusted only where its pieces cover at least this share of the
     /// image (3 %: a strip of floor; less is too little to extrapolate a plane from).
@@ -245,15 +244,15 @@ pub struct ScaleParams {
     /// other, 3 raised the creature with exact flow from 0.024 to 0.048. 0 switches it off, as
     /// does a zero `ground_weight` (no ground at all).
     pub rest_weight: f64,
-    /// The rest prior acts only where the ground covers at least this share of the image's
-    /// bottom tenth ([`super::ground::bottom_share`]): a floor that things stand on runs to the near
-    /// edge of the view (0.71–0.94 on our street, road, crowd, creature and table, 0.89 on the
+    /// The rest prior acts only where the ground covers at least this share of the image's bottom
+    /// tenth ([`super::ground::bottom_share`]): a floor that things stand on runs to the near edge
+    /// of the view (0.71–0.94 on our street, road, crowd, creature and table, 0.89 on the
     /// motorcycle), while a ground-like plane among floating things does not (FlyingThings3D:
-    /// 0.45–0.49, where the floor under a flying object put it 3–5.5× too far). 0.65: at 0.6,
-    /// 20 % less let FlyingThings3D's members through (+0.11); here 0.52–0.78 move no case by
-    /// more than 0.002 (the street and road lose the prior at 0.78, which changes them little).
-    /// The same test lifts the figure prior across a thing's bottom edge over the floor
-    /// (`behind_weight`), whatever `rest_weight` is.
+    /// 0.45–0.49, where the floor under a flying object put it 3–5.5× too far). 0.65: at 0.6, 20 %
+    /// less let FlyingThings3D's members through (+0.11); here 0.52–0.78 move no case by more than
+    /// 0.002 (the street and road lose the prior at 0.78, which changes them little). The same test
+    /// lifts the figure prior across a thing's bottom edge over the floor (`behind_weight`),
+    /// whatever `rest_weight` is.
     pub rest_bottom_share: f64,
     /// Flow jump (px) across a boundary below which the flow counts as continuous there, where
     /// enough of it is trusted (`continuity_trusted_share`): a depth edge needs a flow edge to
