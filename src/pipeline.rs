@@ -179,8 +179,9 @@ pub struct Report {
     /// The strongest rival of the camera's motion (a candidate far from it that explains the
     /// image nearly as well; [`EgoRival`]); `None` when no candidate lay far from it.
     pub ego_rival: Option<EgoRival>,
-    /// Superpixels given the camera's motion because their own hypothesis made their surface
-    /// rugged (a rigid motion fitted to part of a bending body; `init.rugged_ratio`).
+    /// Superpixels of this reconstruction's unit-scale soup given the camera's motion because
+    /// their own hypothesis made their surface rugged (a rigid motion fitted to part of a bending
+    /// body; `init.rugged_ratio`). The fusion's members are not counted.
     pub rugged_to_ego: usize,
     /// The scale solve: energies, rigid segments, pieces moved by tail control.
     pub scales: ScaleReport,
