@@ -296,7 +296,7 @@ impl Problem {
     }
 
     /// The E_cont table of contact `c` between the states `a` of its piece `c.a` and `b` of
-    /// `c.b`: element `i · b.len() + j` is E_cont(a[i], b[j]). The loops run over `b` innermost
+    /// `c.b`: element `i · b.len() + j` is `E_cont(a[i], b[j])`. The loops run over `b` innermost
     /// on columns of plain numbers ([`PointColumns`]: a state behind a camera on a ray is NaN there
     /// and pays σ in both frames through the comparisons of [`TruncatedGaps::add_costs`]), so
     /// where tanh σ ≤ 0.1 (the default σ = 0.1) they compile to vector instructions without

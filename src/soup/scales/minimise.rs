@@ -52,7 +52,8 @@ pub(super) fn steps_at(steps: &[Step], x: f64, sigma: f64) -> f64 {
 ///
 /// One sweep over the sorted breakpoints (−c − σ, −c, −c + σ), between which the sum is linear,
 /// gives its value at every candidate in O(n log n) instead of O(n²) (segments of the background
-/// carry thousands of terms); [`minimise_contacts_plain`] is the reference it is tested against.
+/// carry thousands of terms); `minimise_contacts_plain` (in the tests) is the reference it is
+/// tested against.
 pub(super) fn minimise_contacts(
     terms: &[(f64, f64)],
     steps: &[Step],
