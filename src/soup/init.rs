@@ -83,7 +83,8 @@ pub struct InitParams {
     /// five members; docs/RESULTS.md, stop 54). A rigid mover's own motion mostly does the
     /// opposite, or the camera's motion puts its pieces behind the camera (every car of the
     /// street and the road). Where the other scenes' hypotheses spread more under their own (up
-    /// to 4.8 times, the creature's), both spreads are small: see `rugged_excess`.
+    /// to 4.8 times, the creature's, but for a band of its bending body at 5.85, moved), both
+    /// spreads are small: see `rugged_excess`.
     pub rugged_ratio: f64,
     /// ... and by more than this much in the spread of ln depth: where the spreads under both
     /// motions are small, their ratio is noise. The flag's moved bands differ by 0.25–0.68; the
@@ -487,8 +488,8 @@ impl Surfaces<'_> {
 /// The spread of `values`: their standard deviation (0 for none). Not a robust spread: a bent
 /// surface read as parallax shows in the tails (the folds of the flag's bands), which a median
 /// absolute deviation or a 10th–90th percentile range discards (docs/RESULTS.md, stop 54). A
-/// wild value from a plane nearly edge-on at its anchor is rare: such a plane puts about half
-/// of the superpixel's samples behind the camera, and `fit_plane` refuses it.
+/// wild value needs a plane nearly edge-on at its anchor, which puts the samples on one side of
+/// the anchor behind the camera; `fit_plane` refuses a plane with more than a quarter behind.
 fn spread(values: &[f64]) -> f64 {
     if values.is_empty() {
         return 0.0;
@@ -1243,7 +1244,7 @@ mod tests {
     }
 
     /// Superpixels of one pixel each in a row, 40 px apart (`pixel_row`), each with 30
-    /// correspondences around its anchor on the plane `planes[i]` (mᵀX = 1, at unit translation)
+    /// correspondences within 10 px right of and below its anchor on the plane `planes[i]` (mᵀX = 1, at unit translation)
     /// seen under `motions[i]`, and the intrinsics they are seen with.
     fn planar_row(
         planes: &[Vector3<f64>],
@@ -1280,9 +1281,10 @@ mod tests {
 
     type Samples = Vec<Vec<Correspondence>>;
 
-    /// A motion travelling along x, and the same with its rotation turned by `turn` radians
-    /// about y: that turn adds about −`turn` to every inverse depth the motion reads from the
-    /// first one's flow (its rotation shifts points along x as its translation does).
+    /// A motion whose translation shifts the points along +x, and the same with its rotation
+    /// turned by `turn` radians about y: that turn adds about −`turn` to every inverse depth the
+    /// motion reads from the first one's flow (its rotation shifts points along x as its
+    /// translation does).
     fn sideways(turn: f64) -> (Motion, Motion) {
         let r = nalgebra::Rotation3::from_euler_angles(0.01, -0.02, 0.005).into_inner();
         let t = Vector3::new(1.0, 0.0, 0.0);
@@ -1338,24 +1340,31 @@ mod tests {
         // Pieces 0–4: tilted planes at depths 20–90 under motion 1, which the ego-motion (0)
         // reads as a far flatter surface: motion 1 explains a smooth surface's flow as relief.
         // Pieces 5–7: the ego-motion's own, on one smooth surface. Pieces 8–10: a mover
-        // travelling the other way (motion 2), whose surface the ego-motion spreads more.
+        // (motion 2) whose smooth surface the ego-motion spreads more. Pieces 11–13: a mover
+        // travelling against the camera (motion 3), which the ego-motion puts behind it: its
+        // surface has no depth to compare there, and it keeps its motion.
         let (own, ego) = sideways(-0.1);
         let mover = Motion {
             r: own.r,
             t: Vector3::new(-1.0, 0.2, 0.0).normalize(),
         };
+        let against = Motion {
+            r: ego.r,
+            t: -ego.t,
+        };
         let depths = [
-            20.0, 80.0, 30.0, 90.0, 25.0, 40.0, 42.0, 44.0, 30.0, 31.0, 32.0,
+            20.0, 80.0, 30.0, 90.0, 25.0, 40.0, 42.0, 44.0, 30.0, 31.0, 32.0, 20.0, 80.0, 30.0,
         ];
         let planes: Vec<Vector3<f64>> = depths
             .iter()
             .map(|&d| Vector3::new(0.3, -0.2, 1.0) / d)
             .collect();
-        let motions: Vec<Motion> = (0..11)
+        let motions: Vec<Motion> = (0..14)
             .map(|i| match i {
                 0..=4 => own,
                 5..=7 => ego,
-                _ => mover,
+                8..=10 => mover,
+                _ => against,
             })
             .collect();
         let (sp, samples, k) = planar_row(&planes, &motions);
@@ -1366,22 +1375,32 @@ mod tests {
             focal: FOCAL,
             min_parallax_px: 0.05,
         };
-        let mut labels = vec![1, 1, 1, 1, 1, 0, 0, 0, 2, 2, 2];
+        let hypotheses = [ego, own, mover, against];
+        let start = vec![1, 1, 1, 1, 1, 0, 0, 0, 2, 2, 2, 3, 3, 3];
         let params = InitParams::default();
-        let moved = ego_where_rugged(&surfaces, &[ego, own, mover], &params, &mut labels);
-        assert_eq!(labels, vec![0, 0, 0, 0, 0, 0, 0, 0, 2, 2, 2]);
+        let mut labels = start.clone();
+        let moved = ego_where_rugged(&surfaces, &hypotheses, &params, &mut labels);
+        assert_eq!(labels, vec![0, 0, 0, 0, 0, 0, 0, 0, 2, 2, 2, 3, 3, 3]);
         assert_eq!(moved, 5);
-        // Not where the relief is less than `rugged_ratio` times the ego-motion's.
-        let mut labels = vec![1, 1, 1, 1, 1, 0, 0, 0, 2, 2, 2];
-        let strict = InitParams {
-            rugged_ratio: 100.0,
-            ..params
-        };
-        assert_eq!(
-            ego_where_rugged(&surfaces, &[ego, own, mover], &strict, &mut labels),
-            0
-        );
-        assert_eq!(labels, vec![1, 1, 1, 1, 1, 0, 0, 0, 2, 2, 2]);
+        // Not where the relief is less than `rugged_ratio` times the ego-motion's, nor where it
+        // exceeds the ego-motion's by less than `rugged_excess` (here about 0.5).
+        for strict in [
+            InitParams {
+                rugged_ratio: 100.0,
+                ..params
+            },
+            InitParams {
+                rugged_excess: 0.8,
+                ..params
+            },
+        ] {
+            let mut labels = start.clone();
+            assert_eq!(
+                ego_where_rugged(&surfaces, &hypotheses, &strict, &mut labels),
+                0
+            );
+            assert_eq!(labels, start);
+        }
     }
 
     #[test]
