@@ -1197,38 +1197,9 @@ mod tests {
         // 8 (at unit translation), seen under one motion: 0 and 1 form one surface, 1 and 2 a
         // step of ln 2 in log-depth.
         let motion = camera();
-        let k = Intrinsics {
-            fx: FOCAL,
-            fy: FOCAL,
-            cx: 40.0,
-            cy: 0.0,
-        };
-        let depths = [4.0, 4.0, 8.0];
-        let mut rng = Rng::new(7);
-        let samples: Vec<Vec<Correspondence>> = (0..3)
-            .map(|i| {
-                let centre = Vector3::from(k.ray(40.0 * i as f64, 0.0));
-                (0..30)
-                    .map(|_| {
-                        let ray =
-                            centre + Vector3::new(0.02 * rng.uniform(), 0.02 * rng.uniform(), 0.0);
-                        let moved = motion.r * (ray * depths[i]) + motion.t;
-                        Correspondence {
-                            x1: ray,
-                            x2: moved / moved.z,
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        let sp = pixel_row(&[[0.0; 3]; 3], 40.0);
-        let surfaces = Surfaces {
-            sp: &sp,
-            samples: &samples,
-            k: &k,
-            focal: FOCAL,
-            min_parallax_px: 0.05,
-        };
+        let planes = [4.0, 4.0, 8.0].map(|d| Vector3::new(0.0, 0.0, 1.0 / d));
+        let (sp, samples, k) = planar_row(&planes, &[motion; 3]);
+        let surfaces = surfaces_of(&sp, &samples, &k);
         let adjacency = vec![vec![1], vec![0, 2], vec![1]];
         // Superpixel 0 alone (label 1) beside 1 and 2 (label 0): one surface.
         let same = surfaces.gap(&[0], &[1, 0, 0], 0, &motion, &adjacency);
@@ -1281,6 +1252,30 @@ mod tests {
 
     type Samples = Vec<Vec<Correspondence>>;
 
+    /// The surfaces of the superpixels `sp` with `samples`, seen with `k` (focal [`FOCAL`]).
+    fn surfaces_of<'a>(
+        sp: &'a Superpixels,
+        samples: &'a [Vec<Correspondence>],
+        k: &'a Intrinsics,
+    ) -> Surfaces<'a> {
+        Surfaces {
+            sp,
+            samples,
+            k,
+            focal: FOCAL,
+            min_parallax_px: 0.05,
+        }
+    }
+
+    /// Planes mᵀX = 1 tilted the same way, at depth `d` on the optical axis for each of `depths`
+    /// (at unit translation).
+    fn tilted(depths: &[f64]) -> Vec<Vector3<f64>> {
+        depths
+            .iter()
+            .map(|&d| Vector3::new(0.3, -0.2, 1.0) / d)
+            .collect()
+    }
+
     /// A motion whose translation shifts the points along +x, and the same with its rotation
     /// turned by `turn` radians about y: that turn adds about −`turn` to every inverse depth the
     /// motion reads from the first one's flow (its rotation shifts points along x as its
@@ -1295,20 +1290,10 @@ mod tests {
     #[test]
     fn the_log_depth_spread_is_that_of_the_true_depths_under_the_true_motion() {
         // Five tilted planes at depths 20–90 (at unit translation), seen under one motion.
-        let depths = [20.0, 80.0, 30.0, 90.0, 25.0];
-        let planes: Vec<Vector3<f64>> = depths
-            .iter()
-            .map(|&d| Vector3::new(0.3, -0.2, 1.0) / d)
-            .collect();
+        let planes = tilted(&[20.0, 80.0, 30.0, 90.0, 25.0]);
         let (motion, turned) = sideways(-0.05);
         let (sp, samples, k) = planar_row(&planes, &[motion; 5]);
-        let surfaces = Surfaces {
-            sp: &sp,
-            samples: &samples,
-            k: &k,
-            focal: FOCAL,
-            min_parallax_px: 0.05,
-        };
+        let surfaces = surfaces_of(&sp, &samples, &k);
         let truth: Vec<f64> = (0..5)
             .map(|i| {
                 let [x, y] = sp.segments[i].anchor;
@@ -1352,13 +1337,9 @@ mod tests {
             r: ego.r,
             t: -ego.t,
         };
-        let depths = [
+        let planes = tilted(&[
             20.0, 80.0, 30.0, 90.0, 25.0, 40.0, 42.0, 44.0, 30.0, 31.0, 32.0, 20.0, 80.0, 30.0,
-        ];
-        let planes: Vec<Vector3<f64>> = depths
-            .iter()
-            .map(|&d| Vector3::new(0.3, -0.2, 1.0) / d)
-            .collect();
+        ]);
         let motions: Vec<Motion> = (0..14)
             .map(|i| match i {
                 0..=4 => own,
@@ -1368,13 +1349,7 @@ mod tests {
             })
             .collect();
         let (sp, samples, k) = planar_row(&planes, &motions);
-        let surfaces = Surfaces {
-            sp: &sp,
-            samples: &samples,
-            k: &k,
-            focal: FOCAL,
-            min_parallax_px: 0.05,
-        };
+        let surfaces = surfaces_of(&sp, &samples, &k);
         let hypotheses = [ego, own, mover, against];
         let start = vec![1, 1, 1, 1, 1, 0, 0, 0, 2, 2, 2, 3, 3, 3];
         let params = InitParams::default();
