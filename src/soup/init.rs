@@ -91,6 +91,28 @@ pub struct InitParams {
     /// other scenes' hypotheses by at most 0.11, but for one band of the creature's bending body
     /// (0.35, moved).
     pub rugged_excess: f64,
+    /// At most this many windows are searched for motions (see `add_window_hypotheses`).
+    /// 40, as many as the local RANSAC runs; the crowd at 1500 superpixels uses all 40, and
+    /// motions that took its walkers came from windows 3 to 33.
+    pub window_seeds: usize,
+    /// Five-point samples drawn in each window. 50: with 30 the creature was 0.051 over five
+    /// seeds (0.045 with 50), and 100 was no better than 50 (docs/RESULTS.md, stop 55).
+    pub window_iterations: usize,
+    /// A window is searched around a superpixel whose best cost so far (px beyond the
+    /// fitting's noise deadband) is at least this, and below `explain_px`, where the local
+    /// RANSAC runs already start. 0.05 px: above the rounding of the deadband, below most of
+    /// the 0.01–0.56 px that the camera's motion leaves on the crowd's leftmost walker, which
+    /// it explains at 1.3 times its depth.
+    pub window_min_px: f64,
+    /// A window's best motion becomes a hypothesis when it lowers the costs of the window's
+    /// superpixels by at least this much in total (px; each cost counted up to `explain_px`).
+    /// 4 px: the windows whose motions took the crowd's walkers gained 3–10 px; at 2 px
+    /// motions fitted to parts of the creature's bending body took pieces of it at wrong
+    /// depths (exact flow 0.028 -> 0.048; 0.036 at 4 px), and at 8 px the crowd lost its
+    /// walkers' motions again at some counts (0.20 at 1300). Means over 1300–1700 superpixels
+    /// at 2 / 3 / 4 / 5 / 8 px: crowd 0.072 / 0.066 / 0.054 / 0.071 / 0.10, creature 0.046 /
+    /// 0.050 / 0.038 / 0.039 / 0.039 (docs/RESULTS.md, stop 55).
+    pub window_gain_px: f64,
     /// A superpixel's depth counts as observed when its translation moves it by this much (px).
     pub min_parallax_px: f64,
     /// A candidate for the camera's motion whose direction of travel lies more than this many
@@ -127,6 +149,10 @@ impl Default for InitParams {
             ego_preference_px: 0.3,
             rugged_ratio: 3.0,
             rugged_excess: 0.2,
+            window_seeds: 40,
+            window_iterations: 50,
+            window_min_px: 0.05,
+            window_gain_px: 4.0,
             min_parallax_px: 0.05,
             rival_ego_deg: 5.0,
             ambiguous_ego_excess: 0.045,
@@ -202,6 +228,7 @@ pub fn unit_scale_soup(
     }
     add_local_hypotheses(&mut fit, knn, params, &mut rng);
     fit.set_noise();
+    add_window_hypotheses(&mut fit, knn, params, &mut rng);
 
     let neighbours: Vec<Vec<(u32, f32)>> = adjacency
         .iter()
@@ -797,15 +824,7 @@ fn ego_candidates(
         .filter(|s| s.len() >= EGO_LIGHT_SAMPLES)
         .map(Vec::as_slice)
         .collect();
-    let light: Vec<Vec<Correspondence>> = full
-        .iter()
-        .map(|s| {
-            s.iter()
-                .step_by(s.len() / EGO_LIGHT_SAMPLES)
-                .copied()
-                .collect()
-        })
-        .collect();
+    let light: Vec<Vec<Correspondence>> = full.iter().map(|s| light_samples(s)).collect();
     let score = |m: &Motion, set: &mut dyn Iterator<Item = &[Correspondence]>| -> f64 {
         set.map(|s| planar_cost(s, m, focal, CAP_PX).min(EGO_TRUNCATION_PX))
             .sum()
@@ -817,29 +836,45 @@ fn ego_candidates(
     scored.sort_by(|a, b| a.0.total_cmp(&b.0));
     scored.truncate(EGO_CANDIDATES);
     let full_score = |m: &Motion| score(m, &mut full.iter().copied());
+    let explained = |m: &Motion| -> Vec<Correspondence> {
+        full.iter()
+            .filter(|s| planar_cost(s, m, focal, CAP_PX) < EGO_TRUNCATION_PX)
+            .flat_map(|s| s.iter().step_by(2).copied())
+            .collect()
+    };
     let mut refined: Vec<(f64, Motion)> = scored
         .into_iter()
-        .map(|(_, mut m)| {
-            let mut best = full_score(&m);
-            for _ in 0..3 {
-                let points: Vec<Correspondence> = full
-                    .iter()
-                    .filter(|s| planar_cost(s, &m, focal, CAP_PX) < EGO_TRUNCATION_PX)
-                    .flat_map(|s| s.iter().step_by(2).copied())
-                    .collect();
-                let candidate = refine_motion(&points, &m, 8);
-                let e = full_score(&candidate);
-                if e < best - 1e-9 {
-                    (best, m) = (e, candidate);
-                } else {
-                    break;
-                }
-            }
-            (best, m)
-        })
+        .map(|(_, m)| polish(m, full_score, explained))
         .collect();
     refined.sort_by(|a, b| a.0.total_cmp(&b.0));
     refined
+}
+
+/// Every ⌊n / [`EGO_LIGHT_SAMPLES`]⌋-th of the n correspondences `points` (8 to 15 of them when
+/// n ≥ 8): enough to score a motion by a superpixel's plane at a fraction of the cost.
+fn light_samples(points: &[Correspondence]) -> Vec<Correspondence> {
+    let step = (points.len() / EGO_LIGHT_SAMPLES).max(1);
+    points.iter().step_by(step).copied().collect()
+}
+
+/// `start` refined by Levenberg–Marquardt on the correspondences `points` picks for the current
+/// motion, for as long as `score` (lower is better) falls, at most 3 rounds; with its score.
+fn polish(
+    start: Motion,
+    score: impl Fn(&Motion) -> f64,
+    points: impl Fn(&Motion) -> Vec<Correspondence>,
+) -> (f64, Motion) {
+    let (mut best, mut m) = (score(&start), start);
+    for _ in 0..3 {
+        let candidate = refine_motion(&points(&m), &m, 8);
+        let e = score(&candidate);
+        if e < best - 1e-9 {
+            (best, m) = (e, candidate);
+        } else {
+            break;
+        }
+    }
+    (best, m)
 }
 
 /// The rival ([`EgoRival`]) of the first of `candidates` ((planar score, motion), best first)
@@ -953,6 +988,145 @@ fn add_local_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams, 
         near.iter().for_each(|&j| mark[j] = false);
         fit.add(motion, Some(&near));
     }
+}
+
+/// Searches motions in windows around the superpixels that the hypotheses so far explain only
+/// roughly (best cost between `params.window_min_px` and `explain_px`, worst first; at most
+/// `params.window_seeds` windows, none around a superpixel already in one): each window is the
+/// seed with its K-NN neighbours and theirs (about 50 superpixels). Candidates come from
+/// `params.window_iterations` five-point samples, one point from each of five of the window's
+/// superpixels, and are scored by their gain: how much they lower the window's costs (each
+/// superpixel with its best plane, costs counted up to `explain_px`) below the best so far
+/// ([`best_in_window`]). The best, polished by Levenberg–Marquardt on the superpixels it
+/// explains better, becomes a hypothesis (evaluated around the window) when it gains at least
+/// `params.window_gain_px`.
+///
+/// Why: the camera's motion explains the crowd's leftmost walker, who moves along the camera's
+/// direction of travel, within 0.05–0.35 px at 1.3 times its depth, so no local RANSAC starts
+/// there; and the walker's own motion is found neither from 16 superpixels of one of its sides
+/// (one plane: a motion fitted to it is one of a family, and the other reading of that plane
+/// explains the other side no better than the camera's) nor by counting epipolar inliers
+/// (within a pixel, compromises count as many). Over a window that spans both of its sides the
+/// planes pin it: the motions found there lie about 4° from the walker's.
+fn add_window_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams, rng: &mut Rng) {
+    let n = fit.samples.len();
+    let best: Vec<f64> = (0..n).map(|i| fit.best(i) as f64).collect();
+    let mut order: Vec<usize> = (0..n)
+        .filter(|&i| fit.samples[i].len() >= EGO_LIGHT_SAMPLES)
+        .filter(|&i| best[i] >= params.window_min_px && best[i] < params.explain_px)
+        .collect();
+    order.sort_by(|&a, &b| best[b].total_cmp(&best[a]).then(a.cmp(&b)));
+    let mut covered = vec![false; n];
+    let mut windows = 0;
+    for seed in order {
+        if windows >= params.window_seeds || covered[seed] {
+            continue;
+        }
+        windows += 1;
+        let window = knn_rings(knn, &[seed], 2);
+        window.iter().for_each(|&i| covered[i] = true);
+        let Some((gain, motion)) = best_in_window(fit, &window, &best, params, rng) else {
+            continue;
+        };
+        if gain >= params.window_gain_px {
+            fit.add(motion, Some(&knn_rings(knn, &window, 1)));
+        }
+    }
+}
+
+/// `start` with the superpixels up to `rings` steps away from it in the K-NN graph, each once,
+/// `start` first.
+fn knn_rings(knn: &KnnGraph, start: &[usize], rings: usize) -> Vec<usize> {
+    let mut seen: std::collections::HashSet<usize> = start.iter().copied().collect();
+    let mut all = start.to_vec();
+    let mut from = 0;
+    for _ in 0..rings {
+        let to = all.len();
+        for i in from..to {
+            for &(k, _) in &knn.neighbours[all[i]] {
+                if seen.insert(k as usize) {
+                    all.push(k as usize);
+                }
+            }
+        }
+        from = to;
+    }
+    all
+}
+
+/// The motion that lowers the costs of `window`'s superpixels most below `best` (their best
+/// costs so far, px beyond the deadband), with that gain (see [`add_window_hypotheses`]). The
+/// candidates' gains are summed most open superpixel first, and a candidate is dropped as soon
+/// as what it may still gain cannot lift it above the best so far (the same winner, at a
+/// fraction of the planes fitted). `None` when the window has fewer than five superpixels with
+/// enough correspondences or no sample gives a motion.
+fn best_in_window(
+    fit: &Fitting,
+    window: &[usize],
+    best: &[f64],
+    params: &InitParams,
+    rng: &mut Rng,
+) -> Option<(f64, Motion)> {
+    let (focal, d, cap) = (fit.focal, fit.deadband, params.explain_px);
+    let sampled: Vec<usize> = (window.iter().copied())
+        .filter(|&i| fit.samples[i].len() >= EGO_LIGHT_SAMPLES)
+        .collect();
+    if sampled.len() < 5 {
+        return None;
+    }
+    // Only superpixels not yet explained within the deadband can gain.
+    let mut open: Vec<usize> = sampled.iter().copied().filter(|&i| best[i] > 0.0).collect();
+    open.sort_by(|&a, &b| best[b].total_cmp(&best[a]).then(a.cmp(&b)));
+    let light: Vec<Vec<Correspondence>> = open
+        .iter()
+        .map(|&i| light_samples(&fit.samples[i]))
+        .collect();
+    // What the open superpixels from the k-th on can gain at most.
+    let mut left = vec![0.0; open.len() + 1];
+    for k in (0..open.len()).rev() {
+        left[k] = left[k + 1] + best[open[k]].min(cap);
+    }
+    let gain = |i: usize, points: &[Correspondence], m: &Motion| {
+        let cost = (planar_cost(points, m, focal, CAP_PX) - d).max(0.0);
+        (best[i].min(cap) - cost.min(cap)).max(0.0)
+    };
+    let mut top: Option<(f64, Motion)> = None;
+    for _ in 0..params.window_iterations {
+        let pick: Vec<Correspondence> = (rng.sample_distinct(sampled.len(), 5).into_iter())
+            .map(|j| {
+                let points = &fit.samples[sampled[j]];
+                points[rng.below(points.len())]
+            })
+            .collect();
+        for e in crate::geometry::five_point::five_point(&pick) {
+            let Some(m) = decompose(&e, &pick) else {
+                continue;
+            };
+            let bar = top.map_or(f64::NEG_INFINITY, |(g, _)| g);
+            let (mut g, mut k) = (0.0, 0);
+            while k < open.len() && g + left[k] > bar {
+                g += gain(open[k], &light[k], &m);
+                k += 1;
+            }
+            if k == open.len() && g > bar {
+                top = Some((g, m));
+            }
+        }
+    }
+    let (_, start) = top?;
+    let loss = |m: &Motion| -> f64 {
+        -(open.iter())
+            .map(|&i| gain(i, &fit.samples[i], m))
+            .sum::<f64>()
+    };
+    let improved = |m: &Motion| -> Vec<Correspondence> {
+        (open.iter())
+            .filter(|&&i| planar_cost(&fit.samples[i], m, focal, CAP_PX) - d < best[i])
+            .flat_map(|&i| fit.samples[i].iter().step_by(2).copied())
+            .collect()
+    };
+    let (loss, m) = polish(start, loss, improved);
+    Some((-loss, m))
 }
 
 /// The plane of every superpixel under its assigned motion, from up to 100 of its pixels.
@@ -1375,6 +1549,183 @@ mod tests {
                 0
             );
             assert_eq!(labels, start);
+        }
+    }
+
+    /// A box turning by 3.4° about its vertical axis while it moves sideways, 4 units in front of
+    /// the camera (at unit camera translation), its corner facing the camera: 24 superpixels on
+    /// its left face and 24 on its right, each 30 points, in a grid of 8 × 6 patch centres with
+    /// 0.1 px of noise; and the box's motion as camera 2 sees it (the camera's `camera()` motion
+    /// after the box's).
+    fn turning_box(rng: &mut Rng) -> (Vec<Vec<Correspondence>>, Vec<[f64; 2]>, Motion) {
+        let centre = Vector3::new(0.0, 0.0, 4.0);
+        let corner = Vector3::new(0.0, 0.0, 3.6);
+        let faces = [
+            Vector3::new(-1.0, 0.0, -1.0).normalize(),
+            Vector3::new(1.0, 0.0, -1.0).normalize(),
+        ]
+        .map(|n| n / n.dot(&corner)); // m with mᵀX = 1 through the corner
+        let turn = nalgebra::Rotation3::from_euler_angles(0.0, -0.06, 0.0).into_inner();
+        let shift = Vector3::new(0.9, 0.0, 0.4);
+        let cam = camera();
+        let r = cam.r * turn;
+        let t = cam.r * (centre - turn * centre + shift) + cam.t;
+        let truth = Motion {
+            r,
+            t: t.normalize(),
+        };
+        let mut samples = Vec::new();
+        let mut centres = Vec::new();
+        for i in 0..48 {
+            let c = [(i % 8) as f64 * 0.03 - 0.105, (i / 8) as f64 * 0.03 - 0.075];
+            let m = faces[usize::from(c[0] > 0.0)];
+            let points = (0..30)
+                .map(|_| {
+                    let ray = Vector3::new(
+                        c[0] + 0.012 * (rng.uniform() - 0.5),
+                        c[1] + 0.012 * (rng.uniform() - 0.5),
+                        1.0,
+                    );
+                    let moved = r * (ray / m.dot(&ray)) + t;
+                    let noise = Vector3::new(rng.normal(), rng.normal(), 0.0) * 0.1 / FOCAL;
+                    Correspondence {
+                        x1: ray,
+                        x2: moved / moved.z + noise,
+                    }
+                })
+                .collect();
+            samples.push(points);
+            centres.push(c);
+        }
+        (samples, centres, truth)
+    }
+
+    /// Each superpixel's `k` nearest by `centres`.
+    fn nearest(centres: &[[f64; 2]], k: usize) -> KnnGraph {
+        let neighbours = (0..centres.len())
+            .map(|i| {
+                let mut by: Vec<(u32, f64)> = (0..centres.len())
+                    .filter(|&j| j != i)
+                    .map(|j| {
+                        let d = hypot(centres[i][0] - centres[j][0], centres[i][1] - centres[j][1]);
+                        (j as u32, d)
+                    })
+                    .collect();
+                by.sort_by(|a, b| a.1.total_cmp(&b.1));
+                by.truncate(k);
+                by
+            })
+            .collect();
+        KnnGraph { neighbours }
+    }
+
+    /// A fitting of `samples` with `motions` evaluated everywhere and the noise deadband set.
+    fn fitting<'a>(samples: &'a [Vec<Correspondence>], motions: &[Motion]) -> Fitting<'a> {
+        let mut fit = Fitting {
+            samples,
+            focal: FOCAL,
+            hypotheses: Vec::new(),
+            costs: CostTable::new(samples.len()),
+            everywhere: Vec::new(),
+            deadband: 0.0,
+        };
+        motions.iter().for_each(|&m| _ = fit.add(m, None));
+        fit
+    }
+
+    #[test]
+    fn a_window_across_both_sides_of_a_turning_box_finds_its_motion() {
+        let (samples, centres, truth) = turning_box(&mut Rng::new(7));
+        let off = |m: &Motion| {
+            let (t, r) = (m.translation_angle(&truth), m.rotation_angle(&truth));
+            (t.to_degrees(), r.to_degrees())
+        };
+        // The motion fitted to the left side alone explains that side (one plane, so a motion
+        // of a family) and not the right.
+        let left: Vec<usize> = (0..48).filter(|&i| centres[i][0] < 0.0).collect();
+        let one_side: Vec<Correspondence> = left.iter().flat_map(|&i| samples[i].clone()).collect();
+        let twin = {
+            let h = homography_dlt(&one_side).expect("a homography of one face");
+            let readings = crate::geometry::homography::decompose_homography(&h, &one_side);
+            (readings.into_iter().map(|p| p.motion))
+                .max_by(|a, b| off(a).0.total_cmp(&off(b).0))
+                .expect("two readings of one plane")
+        };
+        assert!(off(&twin).0 > 10.0, "the other reading: {:?}°", off(&twin));
+        let fit = fitting(&samples, &[twin]);
+        let best: Vec<f64> = (0..48).map(|i| fit.best(i) as f64).collect();
+        let right_cost: f64 = (0..48).filter(|i| !left.contains(i)).map(|i| best[i]).sum();
+        assert!(right_cost > 10.0, "the right side costs {right_cost} px");
+        // A window spanning both sides gives the box's motion back, and the gain is what the
+        // right side cost (each superpixel's cost counted up to `explain_px`).
+        let params = InitParams {
+            explain_px: 3.0,
+            ..InitParams::default()
+        };
+        let window: Vec<usize> = (0..48).collect();
+        let (gain, found) = best_in_window(&fit, &window, &best, &params, &mut Rng::new(8))
+            .expect("a motion from 48 superpixels");
+        let (dt, dr) = off(&found);
+        assert!(
+            dt < 1.0 && dr < 0.5,
+            "{dt:.2}° / {dr:.2}° off the box's motion"
+        );
+        // The gain is about what the right side cost: each superpixel's cost counted up to
+        // `explain_px`, less the noise (0.1 px) left on all 48.
+        let right_capped: f64 = (0..48)
+            .filter(|i| !left.contains(i))
+            .map(|i| best[i].min(3.0))
+            .sum();
+        assert!(
+            (right_capped - 8.0..=right_capped).contains(&gain),
+            "gain {gain} for the right side's {right_capped} px"
+        );
+        // Fewer than five superpixels with samples: no motion.
+        assert!(best_in_window(&fit, &window[..4], &best, &params, &mut Rng::new(8)).is_none());
+    }
+
+    #[test]
+    fn windows_add_a_motion_where_it_gains_enough() {
+        let (samples, centres, truth) = turning_box(&mut Rng::new(7));
+        let knn = nearest(&centres, 15);
+        let off = |m: &Motion| m.translation_angle(&truth).to_degrees();
+        let camera_only = |params: &InitParams| {
+            let mut fit = fitting(&samples, &[camera()]);
+            add_window_hypotheses(&mut fit, &knn, params, &mut Rng::new(9));
+            fit.hypotheses
+        };
+        // Under the camera's motion every superpixel costs between 0.05 px and `explain_px`.
+        let params = InitParams {
+            explain_px: 10.0,
+            ..InitParams::default()
+        };
+        let hypotheses = camera_only(&params);
+        assert!(hypotheses.len() >= 2, "no motion added");
+        let closest = hypotheses[1..]
+            .iter()
+            .map(off)
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            closest < 1.0,
+            "the added motions are {closest:.2}° off or more"
+        );
+        // No windows, a gain out of reach, or superpixels explained better than the windows'
+        // threshold: nothing is added.
+        for params in [
+            InitParams {
+                window_seeds: 0,
+                ..params
+            },
+            InitParams {
+                window_gain_px: 1e6,
+                ..params
+            },
+            InitParams {
+                window_min_px: 10.0,
+                ..params
+            },
+        ] {
+            assert_eq!(camera_only(&params).len(), 1);
         }
     }
 
