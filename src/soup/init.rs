@@ -19,6 +19,8 @@
 //!    parallax or behind the camera are flagged and borrow the plane and motion of a touching
 //!    piece, the one nearest in colour first (`fill_degenerate`).
 
+use std::collections::HashSet;
+
 use nalgebra::{Matrix3, Vector3};
 
 use super::plane::{fit_plane, planar_cost};
@@ -991,15 +993,17 @@ fn add_local_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams, 
 }
 
 /// Searches motions in windows around the superpixels that the hypotheses so far explain only
-/// roughly (best cost between `params.window_min_px` and `explain_px`, worst first; at most
-/// `params.window_seeds` windows, none around a superpixel already in one): each window is the
-/// seed with its K-NN neighbours and theirs (about 50 superpixels). Candidates come from
-/// `params.window_iterations` five-point samples, one point from each of five of the window's
-/// superpixels, and are scored by their gain: how much they lower the window's costs (each
-/// superpixel with its best plane, costs counted up to `explain_px`) below the best so far
-/// ([`best_in_window`]). The best, polished by Levenberg–Marquardt on the superpixels it
-/// explains better, becomes a hypothesis (evaluated around the window) when it gains at least
-/// `params.window_gain_px`.
+/// roughly (best cost between `params.window_min_px` and `explain_px`, worst first, with at
+/// least [`EGO_LIGHT_SAMPLES`] correspondences; at most `params.window_seeds` windows, none
+/// around a superpixel already in one): each window is the seed with its K-NN neighbours and
+/// theirs (about 50 superpixels). Candidates come from `params.window_iterations` five-point
+/// samples, one point from each of five of the window's superpixels, and are scored by their
+/// gain: how much they lower the window's costs (each superpixel with its best plane, costs
+/// counted up to `explain_px`) below the best costs before the search ([`best_in_window`]; the
+/// costs are not lowered as windows add motions, so overlapping windows may add near copies of
+/// one motion). The best, polished by Levenberg–Marquardt on the superpixels it explains
+/// better, becomes a hypothesis (evaluated around the window) when its gain over all their
+/// correspondences is at least `params.window_gain_px`.
 ///
 /// Why: the camera's motion explains the crowd's leftmost walker, who moves along the camera's
 /// direction of travel, within 0.05–0.35 px at 1.3 times its depth, so no local RANSAC starts
@@ -1019,7 +1023,10 @@ fn add_window_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams,
     let mut covered = vec![false; n];
     let mut windows = 0;
     for seed in order {
-        if windows >= params.window_seeds || covered[seed] {
+        if windows >= params.window_seeds {
+            break;
+        }
+        if covered[seed] {
             continue;
         }
         windows += 1;
@@ -1037,7 +1044,7 @@ fn add_window_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams,
 /// `start` with the superpixels up to `rings` steps away from it in the K-NN graph, each once,
 /// `start` first.
 fn knn_rings(knn: &KnnGraph, start: &[usize], rings: usize) -> Vec<usize> {
-    let mut seen: std::collections::HashSet<usize> = start.iter().copied().collect();
+    let mut seen: HashSet<usize> = start.iter().copied().collect();
     let mut all = start.to_vec();
     let mut from = 0;
     for _ in 0..rings {
@@ -1056,9 +1063,10 @@ fn knn_rings(knn: &KnnGraph, start: &[usize], rings: usize) -> Vec<usize> {
 
 /// The motion that lowers the costs of `window`'s superpixels most below `best` (their best
 /// costs so far, px beyond the deadband), with that gain (see [`add_window_hypotheses`]). The
-/// candidates' gains are summed most open superpixel first, and a candidate is dropped as soon
-/// as what it may still gain cannot lift it above the best so far (the same winner, at a
-/// fraction of the planes fitted). `None` when the window has fewer than five superpixels with
+/// candidates are ranked by their gain on [`light_samples`] of each superpixel, summed most
+/// open superpixel first; a candidate is dropped as soon as what it may still gain cannot lift
+/// it above the best so far (the same winner, at a fraction of the planes fitted). The winner is
+/// polished and its gain taken over all the correspondences. `None` when the window has fewer than five superpixels with
 /// enough correspondences or no sample gives a motion.
 fn best_in_window(
     fit: &Fitting,
@@ -1619,7 +1627,7 @@ mod tests {
         KnnGraph { neighbours }
     }
 
-    /// A fitting of `samples` with `motions` evaluated everywhere and the noise deadband set.
+    /// A fitting of `samples` with `motions` evaluated everywhere, without a noise deadband.
     fn fitting<'a>(samples: &'a [Vec<Correspondence>], motions: &[Motion]) -> Fitting<'a> {
         let mut fit = Fitting {
             samples,
