@@ -32,6 +32,7 @@ use crate::geometry::Correspondence;
 use crate::geometry::essential::{
     MinimalSolver, Motion, decompose, eight_point, refine_motion, robust_motion, sampson,
 };
+use crate::geometry::five_point::five_point;
 use crate::geometry::homography::{homography_dlt, transfer_error};
 use crate::grid::Grid;
 use crate::mrf::graphcut::{CostTable, alpha_expansion};
@@ -108,8 +109,8 @@ pub struct InitParams {
     pub window_min_px: f64,
     /// A window's best motion becomes a hypothesis when it lowers the costs of the window's
     /// superpixels by at least this much in total (px; each cost counted up to `explain_px`).
-    /// 4 px: the windows whose motions took the crowd's walkers gained 3–10 px; at 2 px
-    /// motions fitted to parts of the creature's bending body took pieces of it at wrong
+    /// 4 px: with 2 px the motions nearest the crowd's walkers gained 2.3–9.9 px, but
+    /// motions fitted to parts of the creature's bending body also took pieces of it at wrong
     /// depths (exact flow 0.028 -> 0.048; 0.036 at 4 px), and at 8 px the crowd lost its
     /// walkers' motions again at some counts (0.20 at 1300). Means over 1300–1700 superpixels
     /// at 2 / 3 / 4 / 5 / 8 px: crowd 0.072 / 0.066 / 0.054 / 0.071 / 0.10, creature 0.046 /
@@ -811,7 +812,7 @@ fn ego_candidates(
             .into_iter()
             .map(|i| sparse[i])
             .collect();
-        for e in crate::geometry::five_point::five_point(&pick) {
+        for e in five_point(&pick) {
             let count = sparse.iter().filter(|c| sampson(&e, c) < within).count();
             if let Some(m) = decompose(&e, &pick) {
                 ranked.push((count, m));
@@ -1006,7 +1007,7 @@ fn add_local_hypotheses(fit: &mut Fitting, knn: &KnnGraph, params: &InitParams, 
 /// correspondences is at least `params.window_gain_px`.
 ///
 /// Why: the camera's motion explains the crowd's leftmost walker, who moves along the camera's
-/// direction of travel, within 0.05–0.35 px at 1.3 times its depth, so no local RANSAC starts
+/// direction of travel, within 0.01–0.56 px at 1.3 times its depth, so no local RANSAC starts
 /// there; and the walker's own motion is found neither from 16 superpixels of one of its sides
 /// (one plane: a motion fitted to it is one of a family, and the other reading of that plane
 /// explains the other side no better than the camera's) nor by counting epipolar inliers
@@ -1066,8 +1067,8 @@ fn knn_rings(knn: &KnnGraph, start: &[usize], rings: usize) -> Vec<usize> {
 /// candidates are ranked by their gain on [`light_samples`] of each superpixel, summed most
 /// open superpixel first; a candidate is dropped as soon as what it may still gain cannot lift
 /// it above the best so far (the same winner, at a fraction of the planes fitted). The winner is
-/// polished and its gain taken over all the correspondences. `None` when the window has fewer than five superpixels with
-/// enough correspondences or no sample gives a motion.
+/// polished and its gain taken over all the correspondences. `None` when the window has fewer
+/// than five superpixels with enough correspondences or no sample gives a motion.
 fn best_in_window(
     fit: &Fitting,
     window: &[usize],
@@ -1106,7 +1107,7 @@ fn best_in_window(
                 points[rng.below(points.len())]
             })
             .collect();
-        for e in crate::geometry::five_point::five_point(&pick) {
+        for e in five_point(&pick) {
             let Some(m) = decompose(&e, &pick) else {
                 continue;
             };
@@ -1608,23 +1609,10 @@ mod tests {
         (samples, centres, truth)
     }
 
-    /// Each superpixel's `k` nearest by `centres`.
-    fn nearest(centres: &[[f64; 2]], k: usize) -> KnnGraph {
-        let neighbours = (0..centres.len())
-            .map(|i| {
-                let mut by: Vec<(u32, f64)> = (0..centres.len())
-                    .filter(|&j| j != i)
-                    .map(|j| {
-                        let d = hypot(centres[i][0] - centres[j][0], centres[i][1] - centres[j][1]);
-                        (j as u32, d)
-                    })
-                    .collect();
-                by.sort_by(|a, b| a.1.total_cmp(&b.1));
-                by.truncate(k);
-                by
-            })
-            .collect();
-        KnnGraph { neighbours }
+    /// Each superpixel's 15 nearest by `centres` (the pipeline's K-NN graph, K = 15).
+    fn nearest(centres: &[[f64; 2]]) -> KnnGraph {
+        let points: Vec<[f64; 3]> = centres.iter().map(|c| [c[0], c[1], 0.0]).collect();
+        crate::superpixels::graph::knn_graph_3d(&points, centres, 15, 1.0)
     }
 
     /// A fitting of `samples` with `motions` evaluated everywhere, without a noise deadband.
@@ -1695,7 +1683,7 @@ mod tests {
     #[test]
     fn windows_add_a_motion_where_it_gains_enough() {
         let (samples, centres, truth) = turning_box(&mut Rng::new(7));
-        let knn = nearest(&centres, 15);
+        let knn = nearest(&centres);
         let off = |m: &Motion| m.translation_angle(&truth).to_degrees();
         let camera_only = |params: &InitParams| {
             let mut fit = fitting(&samples, &[camera()]);
