@@ -1068,7 +1068,8 @@ fn knn_rings(knn: &KnnGraph, start: &[usize], rings: usize) -> Vec<usize> {
 /// open superpixel first; a candidate is dropped as soon as what it may still gain cannot lift
 /// it above the best so far (the same winner, at a fraction of the planes fitted). The winner is
 /// polished and its gain taken over all the correspondences. `None` when the window has fewer
-/// than five superpixels with enough correspondences or no sample gives a motion.
+/// than five superpixels with enough correspondences, when even explaining all of them would
+/// gain less than `params.window_gain_px`, or when no sample gives a motion.
 fn best_in_window(
     fit: &Fitting,
     window: &[usize],
@@ -1083,32 +1084,43 @@ fn best_in_window(
     if sampled.len() < 5 {
         return None;
     }
+    // The draws come first and every window makes them, so that which windows are skipped
+    // below changes no later window's draws.
+    let picks: Vec<Vec<Correspondence>> = (0..params.window_iterations)
+        .map(|_| {
+            (rng.sample_distinct(sampled.len(), 5).into_iter())
+                .map(|j| {
+                    let points = &fit.samples[sampled[j]];
+                    points[rng.below(points.len())]
+                })
+                .collect()
+        })
+        .collect();
     // Only superpixels not yet explained within the deadband can gain.
     let mut open: Vec<usize> = sampled.iter().copied().filter(|&i| best[i] > 0.0).collect();
     open.sort_by(|&a, &b| best[b].total_cmp(&best[a]).then(a.cmp(&b)));
-    let light: Vec<Vec<Correspondence>> = open
-        .iter()
-        .map(|&i| light_samples(&fit.samples[i]))
-        .collect();
     // What the open superpixels from the k-th on can gain at most.
     let mut left = vec![0.0; open.len() + 1];
     for k in (0..open.len()).rev() {
         left[k] = left[k + 1] + best[open[k]].min(cap);
     }
+    // A window that could not gain `window_gain_px` even if every open superpixel were
+    // explained is not searched (most windows of a static scene).
+    if left[0] < params.window_gain_px {
+        return None;
+    }
+    let light: Vec<Vec<Correspondence>> = open
+        .iter()
+        .map(|&i| light_samples(&fit.samples[i]))
+        .collect();
     let gain = |i: usize, points: &[Correspondence], m: &Motion| {
         let cost = (planar_cost(points, m, focal, CAP_PX) - d).max(0.0);
         (best[i].min(cap) - cost.min(cap)).max(0.0)
     };
     let mut top: Option<(f64, Motion)> = None;
-    for _ in 0..params.window_iterations {
-        let pick: Vec<Correspondence> = (rng.sample_distinct(sampled.len(), 5).into_iter())
-            .map(|j| {
-                let points = &fit.samples[sampled[j]];
-                points[rng.below(points.len())]
-            })
-            .collect();
-        for e in five_point(&pick) {
-            let Some(m) = decompose(&e, &pick) else {
+    for pick in &picks {
+        for e in five_point(pick) {
+            let Some(m) = decompose(&e, pick) else {
                 continue;
             };
             let bar = top.map_or(f64::NEG_INFINITY, |(g, _)| g);
@@ -1678,6 +1690,17 @@ mod tests {
         );
         // Fewer than five superpixels with samples: no motion.
         assert!(best_in_window(&fit, &window[..4], &best, &params, &mut Rng::new(8)).is_none());
+        // A window that cannot gain `window_gain_px` is not searched, and it makes the same
+        // draws as one that is, so the windows after it draw the same samples.
+        let reachable: f64 = best.iter().map(|b| b.min(3.0)).sum();
+        let unreachable = InitParams {
+            window_gain_px: reachable + 0.1,
+            ..params
+        };
+        let (mut searched, mut skipped) = (Rng::new(8), Rng::new(8));
+        assert!(best_in_window(&fit, &window, &best, &params, &mut searched).is_some());
+        assert!(best_in_window(&fit, &window, &best, &unreachable, &mut skipped).is_none());
+        assert_eq!(searched.next_u32(), skipped.next_u32());
     }
 
     #[test]
