@@ -96,7 +96,9 @@ step "cargo test (native)" count_cargo cargo test
 step "wasm release build + wasm-bindgen" - scripts/build-web.sh
 # Every test target is built for wasm32 and run by wasm-bindgen-test-runner; only
 # #[wasm_bindgen_test] functions run there (browser suites: tests/web*.rs, and tests/parity.rs,
-# which also runs natively and asks both for the same depth bits). Doc tests are native.
+# which also runs natively and asks both for the same depth bits). Doc tests are native. They run
+# the build without wasm SIMD; the page's worker build with SIMD (scripts/build-web.sh) is asked
+# for the same files, byte for byte, by tests/e2e/page.test.mjs.
 step "wasm tests (headless Chromium)" count_cargo \
     env CARGO_TARGET_WASM32_UNKNOWN_UNKNOWN_RUNNER=wasm-bindgen-test-runner \
     cargo test --target wasm32-unknown-unknown --tests

@@ -3,7 +3,7 @@
 // parameters, the time of each pipeline stage in the worker, and the peak memory of the tab;
 // plus how fast the page and its worker load.
 //
-//   node benches/page.mjs [--runs 3] [--no-loading] [--scene street] [--pair DIR]
+//   node benches/page.mjs [--runs 3] [--no-loading] [--scene street] [--pair DIR] [--worker scalar]
 //
 // Needs the release wasm in www/pkg (scripts/build-web.sh); builds the `soup` CLI (release) to
 // render the inputs with `soup synth`:
@@ -16,7 +16,9 @@
 // another synthetic scene instead of the street (`soup synth --help` lists them; the crowd, whose
 // first pass with the page's flow pins too few scales, shows what a second pass costs).
 // `--pair DIR` benches DIR's frame1.png and frame2.png instead of the synthetic inputs (a pair
-// of any size, for example one of ../shared/eval's, as a person would pick them).
+// of any size, for example one of ../shared/eval's, as a person would pick them). `--worker scalar`
+// (or `full`) runs the end-to-end rows with the page's `?worker=scalar`: the lean build without
+// wasm SIMD (www/worker.js), to compare with the default.
 // Each run uses a fresh browser. The photos are picked as files on disk, as a person picks them
 // (Playwright given buffers instead passes them through the page's JavaScript heap as base64:
 // about 100 MiB of garbage in the renderer for the 24 MP pair). Times are the minimum over runs;
@@ -41,6 +43,7 @@ const { values } = parseArgs({
   options: {
     runs: { type: 'string', default: '3' },
     'no-loading': { type: 'boolean', default: false },
+    worker: { type: 'string', default: '' },
     scene: { type: 'string', default: 'street' },
     pair: { type: 'string' },
   },
@@ -122,7 +125,7 @@ async function endToEnd(files) {
   let sampler = Promise.resolve();
   try {
     const page = await browser.newPage({ viewport: { width: 1100, height: 900 } });
-    await page.goto(server.url);
+    await page.goto(values.worker === '' ? server.url : `${server.url}?worker=${values.worker}`);
     await page.waitForFunction(() => document.body.dataset.state === 'idle', null, { timeout: 120_000 });
     await page.evaluate(() => window.soupPage.viewerReady);
     const pids = await rendererPids(browser);
@@ -255,7 +258,7 @@ try {
   };
   const loadRows = [];
   for (const [label, network] of values['no-loading'] ? [] : NETWORKS) {
-    for (const [module, name] of [['lean', 'soup_worker'], ['full', 'superpixel_soup']]) {
+    for (const [module, name] of [['lean', 'soup_worker_simd'], ['full', 'superpixel_soup']]) {
       const loads = [];
       for (let run = 0; run < runs; run++) {
         loads.push(await loading(module, network));

@@ -16,7 +16,8 @@
 //
 // URL options: ?backend=auto|webgpu|webgl2 picks the viewer's graphics backend; ?threads=1
 // makes the fusion's members in the pipeline's worker alone (www/worker.js); ?worker=full
-// runs the pipeline with the full wasm build instead of the lean one (for measurements).
+// runs the pipeline with the full wasm build instead of the lean one, ?worker=scalar with the
+// lean build without wasm SIMD (for measurements and tests).
 
 import { $, page } from './page/ui.js';
 import { INTRINSIC_FIELDS, fillForm, refreshIntrinsics } from './page/params.js';

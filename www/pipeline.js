@@ -26,9 +26,10 @@ export class Pipeline {
   /**
    * @param {object} handlers
    *   onProgress(stage, fraction): progress of the running reconstruction;
-   *   onReady({ version, defaults, startMs }): each time a (re)started worker has loaded its module;
+   *   onReady({ version, defaults, build, startMs }): each time a (re)started worker has loaded its
+   *     module (`build`: which wasm build, www/worker.js);
    *   onFailed(message): the worker could not load its module.
-   * @param {'lean' | 'full'} module the worker's wasm build (see www/worker.js)
+   * @param {'lean' | 'scalar' | 'full'} module the worker's wasm build (see www/worker.js)
    * @param {string | null} threads at most this many workers make a run's fusion members at
    *   once (www/worker.js); null: the worker's own limit
    */
@@ -67,7 +68,7 @@ export class Pipeline {
     this.ready = new Promise((resolve, reject) => {
       worker.onmessage = ({ data }) => {
         if (data.type === 'ready') {
-          const info = { version: data.version, defaults: data.defaults, startMs: performance.now() - started };
+          const info = { version: data.version, defaults: data.defaults, build: data.build, startMs: performance.now() - started };
           this.handlers.onReady?.(info);
           resolve(info);
         } else if (data.type === 'failed') {

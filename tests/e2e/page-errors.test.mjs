@@ -83,8 +83,9 @@ test('out of memory is told apart from a crash, and the next run works', async (
   // first, so the reconstruction runs out of memory part way, as on a device without memory to
   // spare (growing reserves address space; it does not use the memory).
   const [worker] = page.workers();
-  const free = await worker.evaluate(async () => {
-    const soup = await import(new URL('pkg/soup_worker.js', self.location.href).href);
+  const build = await page.evaluate(() => document.body.dataset.workerBuild);
+  const free = await worker.evaluate(async (build) => {
+    const soup = await import(new URL(`pkg/${build}.js`, self.location.href).href);
     const { memory } = await soup.default(); // the worker's instance, already loaded
     const page = 65536;
     memory.grow(2 ** 32 / page - 128 - memory.buffer.byteLength / page);
@@ -96,7 +97,7 @@ test('out of memory is told apart from a crash, and the next run works', async (
       // the limit is where this test expects it
     }
     return { left: 2 ** 32 - memory.buffer.byteLength, more };
-  });
+  }, build);
   assert.deepEqual(free, { left: 128 * 65536, more: 0 });
   await page.click('#sample-button');
   assert.equal(await waitForRunEnd(page), 'error');

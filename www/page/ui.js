@@ -10,8 +10,11 @@ export const $ = (id) => document.getElementById(id);
 const URL_OPTIONS = new URLSearchParams(location.search);
 /** ?backend=auto|webgpu|webgl2 picks the viewer's graphics backend. */
 export const BACKEND = URL_OPTIONS.get('backend') ?? 'auto';
-/** ?worker=full runs the pipeline with the full wasm build instead of the lean one. */
-export const WORKER_MODULE = URL_OPTIONS.get('worker') === 'full' ? 'full' : 'lean';
+/**
+ * ?worker=full runs the pipeline with the full wasm build instead of the lean one; ?worker=scalar
+ * with the lean build without wasm SIMD, even where the browser has SIMD (www/worker.js).
+ */
+export const WORKER_MODULE = ['full', 'scalar'].includes(URL_OPTIONS.get('worker')) ? URL_OPTIONS.get('worker') : 'lean';
 /**
  * ?threads=N: at most N workers make the fusion's members at once (www/worker.js; 1: the
  * pipeline's worker alone, for measurements); null: as many as the machine's cores, up to 4.

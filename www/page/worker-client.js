@@ -32,8 +32,9 @@ export const STAGE_LABELS = {
 /** Starts the worker; `onFirstReady` runs once, when the page has the library's defaults. */
 export function startPipeline(onFirstReady) {
   page.pipeline = new Pipeline({
-    onReady: ({ version, defaults, startMs }) => {
+    onReady: ({ version, defaults, build, startMs }) => {
       page.workerStartMs.push(startMs);
+      document.body.dataset.workerBuild = build; // which wasm build the worker runs (tests)
       if (page.defaults === null) {
         page.readyMs = performance.now(); // since navigation start
         page.defaults = defaults;
