@@ -49,6 +49,10 @@ const { values } = parseArgs({
   },
 });
 const runs = Number(values.runs);
+if (!['', 'lean', 'scalar', 'full'].includes(values.worker)) {
+  console.error(`--worker ${values.worker}: expected lean, scalar or full`);
+  process.exit(2);
+}
 const scene = values.scene;
 
 const work = mkdtempSync(path.join(tmpdir(), 'soup-page-bench-'));
@@ -159,6 +163,7 @@ async function endToEnd(files) {
       wasmMemory: run.memoryBytes / 2 ** 20,
       memory: Math.max(largest(pids, 'VmHWM'), sampled),
       workingSize: report.working_size.join('×'),
+      build: await page.evaluate(() => document.body.dataset.workerBuild),
     };
   } finally {
     sampling = false;
@@ -236,11 +241,13 @@ try {
     }
     await browser.close();
   }
+  let lastBuild = '';
   for (const [name, files] of cases) {
     const results = [];
     for (let run = 0; run < runs; run++) {
       results.push(await endToEnd(files));
     }
+    lastBuild = results[0].build;
     const stageNames = Object.keys(results[0].stagesMs);
     stageRows.push(
       `| ${name} | ` + stageNames.map((s) => `${s} ${min(results.map((r) => r.stagesMs[s])).toFixed(0)}`).join(' · ') + ' |',
@@ -267,7 +274,7 @@ try {
       loadRows.push(`| ${label} | ${module} (${size(name)}) | ${ms('ready')} | ${ms('viewer')} | ${ms('worker')} | ${ms('restart')} |`);
     }
   }
-  console.log(`\nThe page end to end in headless Chromium, default parameters, minimum of ${runs} runs (fresh browser each)\n`);
+  console.log(`\nThe page end to end in headless Chromium, default parameters, minimum of ${runs} runs (fresh browser each; the worker's wasm build: ${lastBuild})\n`);
   console.log('| input | working size | end to end (pick → result shown) | pipeline stages in wasm | peak tab memory (renderer, VmHWM or sampled VmRSS) | worker wasm memory |');
   console.log('| --- | --- | --- | --- | --- | --- |');
   console.log(rows.join('\n'));

@@ -29,6 +29,12 @@ wasm-bindgen --target web --out-dir www/pkg --out-name soup_worker \
     "$target/worker/wasm32-unknown-unknown/release/superpixel_soup.wasm"
 wasm-bindgen --target web --out-dir www/pkg --out-name soup_worker_simd \
     "$target/worker-simd/wasm32-unknown-unknown/release/superpixel_soup.wasm"
+# The flags above are ignored where RUSTFLAGS is set: then the "SIMD" build would be the other
+# one again, and nothing else would tell. Its target_features section must name simd128.
+if ! grep -q simd128 www/pkg/soup_worker_simd_bg.wasm; then
+    echo "error: www/pkg/soup_worker_simd_bg.wasm was built without simd128 (is RUSTFLAGS set?)" >&2
+    exit 1
+fi
 for name in superpixel_soup soup_worker soup_worker_simd; do
     file="www/pkg/${name}_bg.wasm"
     echo "ok: $file ($(du -k "$file" | cut -f1) KiB, $(gzip -9 -c "$file" | wc -c | awk '{printf "%d", $1 / 1024}') KiB gzipped)"

@@ -70,8 +70,8 @@ const MODULES = {
   full: 'superpixel_soup',
 };
 const SEARCH = new URL(import.meta.url).searchParams;
-/** The wasm build this worker loads. */
-const BUILD = MODULES[SEARCH.get('module')] ?? MODULES.lean;
+/** The wasm build this worker loads (the lean one for a missing or unknown `?module=`). */
+const BUILD = Object.hasOwn(MODULES, SEARCH.get('module') ?? '') ? MODULES[SEARCH.get('module')] : MODULES.lean;
 const soup = await import(`./pkg/${BUILD}.js`);
 
 /**

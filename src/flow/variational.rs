@@ -7,8 +7,8 @@
 //!
 //! with E_I the linearised brightness constancy (I_z + I_x du + I_y dv)² and E_G the linearised
 //! gradient constancy, each normalised by the squared local gradient (+ ζ²) so strong edges do
-//! not dominate. Frame 2 is warped once by w; the derivatives are taken on the mean of frame 1
-//! and the warped frame 2. Pixels that w carries outside frame 2 get no data term (frame 2 holds
+//! not dominate. Frame 2 is warped by w (not by w + dw), row by row again in each fixed-point
+//! iteration; the derivatives are taken on the mean of frame 1 and the warped frame 2. Pixels that w carries outside frame 2 get no data term (frame 2 holds
 //! nothing to compare them with), so smoothness extends the flow of their neighbours.
 //!
 //! Each fixed-point (outer) iteration freezes the robust weights Ψ' at the current dw and solves
@@ -119,8 +119,10 @@ type Constancy = [f32; 9];
 /// iteration sweeps down the image ([`Derivatives::equations`]), from the few rows around the
 /// current one: holding the equations for the whole level would take 36 bytes per pixel, and
 /// holding their ingredients (the first derivatives, the difference and the inside mask) 13.
-/// The base flow does not change within a refinement, so rows made for one iteration stay
-/// valid for the next; the arithmetic is that of whole arrays, so the results are the same bits.
+/// The price is frame 2 warped again in each iteration (rows still held from the iteration
+/// before serve the next only on levels of at most five rows: the base flow does not change
+/// within a refinement). The arithmetic is that of whole arrays, so the results are the same
+/// bits.
 struct Derivatives<'a> {
     from: &'a Level,
     to: &'a Level,
@@ -133,9 +135,11 @@ struct Derivatives<'a> {
     second: SecondDerivativeRows,
 }
 
-/// The last [`Rows::COUNT`] rows asked for of two `w`-wide fields, row r in slot r mod COUNT.
-/// The equations of row y need the first derivatives of rows y − 1 … y + 1, and those the
-/// mean of rows y − 2 … y + 2: five rows.
+/// Rows of two `w`-wide fields, row r in slot r mod [`Rows::COUNT`]: each slot holds the last
+/// row asked for that falls in it. The equations of row y need the first derivatives of rows
+/// y − 1 … y + 1, and those the mean of rows y − 2 … y + 2, so five slots hold every row a row's
+/// equations read (four would do, as rows y − 2 and y + 2 are never read together; three would
+/// not).
 struct Rows {
     w: usize,
     a: Vec<f32>,
@@ -147,6 +151,7 @@ struct Rows {
 impl Rows {
     const COUNT: usize = 5;
 
+    /// Empty slots for rows `w` wide.
     fn new(w: usize) -> Self {
         Rows {
             w,
@@ -156,17 +161,20 @@ impl Rows {
         }
     }
 
+    /// Whether row `r` is held.
     fn holds(&self, r: usize) -> bool {
         self.held[r % Self::COUNT] == r
     }
 
     /// Row `r` of field `a` (held).
     fn a(&self, r: usize) -> &[f32] {
+        debug_assert!(self.holds(r), "row {r} is not held");
         &self.a[(r % Self::COUNT) * self.w..][..self.w]
     }
 
     /// Row `r` of field `b` (held).
     fn b(&self, r: usize) -> &[f32] {
+        debug_assert!(self.holds(r), "row {r} is not held");
         &self.b[(r % Self::COUNT) * self.w..][..self.w]
     }
 
@@ -327,6 +335,12 @@ fn y_differences(above: &[f32], below: &[f32], scale: f32, dy: &mut [f32]) {
     }
 }
 
+/// Row `r` of the base flow (u, v) (`w` values) in [`System`]'s padded layout (`flow`, stride
+/// w + 2): padded row r + 1, from column 1.
+fn base_row(flow: &[[f32; 2]], w: usize, r: usize) -> &[[f32; 2]] {
+    &flow[(r + 1) * (w + 2) + 1..][..w]
+}
+
 /// One pixel's row of the linear system of a fixed-point iteration:
 /// `du = (rhs_u + Σₙ wₙ·du_n − a12·dv) · inv_u` and `dv = (rhs_v + Σₙ wₙ·dv_n − a12·du) · inv_v`
 /// over the 4-neighbours n, where the edge weights are this pixel's `wx` (right), `wy` (down)
@@ -432,9 +446,7 @@ impl System {
                 &increment[row + stride..][..stride],
             );
             // This row's equations, indexed like the padded row (column 0 unused).
-            // (Row r of the base flow is padded row r + 1, from column 1.)
-            let base = |r: usize| &flow[(r + 1) * stride + 1..][..w];
-            derivatives.equations(y - 1, base, &mut equations[1..]);
+            derivatives.equations(y - 1, |r| base_row(flow, w, r), &mut equations[1..]);
             let (above, rest) = coefficients.split_at_mut(row);
             let (coefficients_up, coefficients_mid) = (&above[row - stride..], &mut rest[..stride]);
             // Weight of the edge to the left neighbour: the previous pixel's right edge.
@@ -636,7 +648,7 @@ mod tests {
         // A flow that carries some pixels out of frame 2, on a small and a two-row level, with
         // the rows asked for top to bottom twice (two fixed-point iterations), then every other
         // row bottom to top (rows held from other rows' requests must be the right ones).
-        for (w, h) in [(37, 23), (9, 2)] {
+        for (w, h) in [(37, 23), (9, 2), (2, 3)] {
             let (a, b) = (texture(w, h, 0.0), texture(w, h, 1.5));
             let mut rng = crate::rng::Rng::new(11);
             let flow: Vec<[f32; 2]> = (0..w * h)
@@ -665,6 +677,18 @@ mod tests {
                     assert_eq!(got, want, "{w}×{h}, pixel ({x}, {y})");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn the_padded_base_flow_rows_are_the_input_rows() {
+        let (w, h) = (5, 3);
+        let u: Vec<f32> = (0..w * h).map(|i| i as f32).collect();
+        let v: Vec<f32> = (0..w * h).map(|i| -(i as f32)).collect();
+        let system = System::new(w, h, u.clone(), v.clone());
+        for r in 0..h {
+            let row: Vec<[f32; 2]> = (0..w).map(|x| [u[r * w + x], v[r * w + x]]).collect();
+            assert_eq!(base_row(&system.flow, w, r), &row[..], "row {r}");
         }
     }
 

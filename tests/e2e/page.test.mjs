@@ -231,6 +231,7 @@ test('the fusion\'s members made in helper workers, and the build without SIMD, 
   const scalar = await runWith('?threads=2&worker=scalar');
   assert.equal(alone.helpers, 0);
   assert.equal(helped.helpers, helped.cores >= 2 ? 1 : 0);
+  assert.equal(scalar.helpers, helped.helpers);
   assert.deepEqual([alone.build, helped.build, scalar.build], ['soup_worker_simd', 'soup_worker_simd', 'soup_worker']);
   for (const other of [helped, scalar]) {
     assert.ok(alone.depth.equals(other.depth), `the depth of ${other.build} with ${other.helpers} helpers differs`);

@@ -22,12 +22,12 @@ async function head(file) {
 }
 
 test('wasm is served as application/wasm and modules as JavaScript', async () => {
-  for (const file of ['www/pkg/superpixel_soup_bg.wasm', 'www/pkg/soup_worker_bg.wasm']) {
+  for (const file of ['www/pkg/superpixel_soup_bg.wasm', 'www/pkg/soup_worker_bg.wasm', 'www/pkg/soup_worker_simd_bg.wasm']) {
     const wasm = await head(file);
     assert.equal(wasm.status, 200, file);
     assert.equal(wasm.headers.get('content-type'), 'application/wasm', file);
   }
-  for (const file of ['www/main.js', 'www/worker.js', 'www/pkg/superpixel_soup.js', 'www/pkg/soup_worker.js']) {
+  for (const file of ['www/main.js', 'www/worker.js', 'www/pkg/superpixel_soup.js', 'www/pkg/soup_worker.js', 'www/pkg/soup_worker_simd.js']) {
     const js = await head(file);
     assert.equal(js.status, 200, file);
     assert.equal(js.headers.get('content-type'), 'text/javascript', file);
