@@ -38,8 +38,8 @@
 //       → { type: 'vote', id, index, vote: { width, height, depth, pinned } | error }… (one per
 //       count, `index` its place in `counts`), then a reply (a helper's request)
 // Unasked: { type: 'ready', version, defaults, build } once the module is loaded (`build`: the
-// name of the wasm build in www/pkg/ it loaded); { type: 'failed',
-// message } when it cannot be loaded. A helper (`?helper=1`) first posts { type: 'waiting' }
+// name of the wasm build in www/pkg/ it loaded); { type: 'failed', message } when it cannot be
+// loaded. A helper (`?helper=1`) first posts { type: 'waiting' }
 // and loads the module it is then sent, { type: 'module', module: WebAssembly.Module }.
 // Errors: { type: 'error', id, name, message, fatal }. `fatal` means the wasm instance aborted
 // (out of memory, or a bug) and is unusable: the page replaces the worker. An out-of-memory abort
@@ -70,8 +70,9 @@ const MODULES = {
   full: 'superpixel_soup',
 };
 const SEARCH = new URL(import.meta.url).searchParams;
-/** The wasm build this worker loads (the lean one for a missing or unknown `?module=`). */
-const BUILD = Object.hasOwn(MODULES, SEARCH.get('module') ?? '') ? MODULES[SEARCH.get('module')] : MODULES.lean;
+const ASKED = SEARCH.get('module') ?? 'lean';
+/** The wasm build this worker loads (the lean one for an unknown `?module=`). */
+const BUILD = Object.hasOwn(MODULES, ASKED) ? MODULES[ASKED] : MODULES.lean;
 const soup = await import(`./pkg/${BUILD}.js`);
 
 /**

@@ -8,8 +8,9 @@
 //! with E_I the linearised brightness constancy (I_z + I_x du + I_y dv)² and E_G the linearised
 //! gradient constancy, each normalised by the squared local gradient (+ ζ²) so strong edges do
 //! not dominate. Frame 2 is warped by w (not by w + dw), row by row again in each fixed-point
-//! iteration; the derivatives are taken on the mean of frame 1 and the warped frame 2. Pixels that w carries outside frame 2 get no data term (frame 2 holds
-//! nothing to compare them with), so smoothness extends the flow of their neighbours.
+//! iteration; the derivatives are taken on the mean of frame 1 and the warped frame 2. Pixels
+//! that w carries outside frame 2 get no data term (frame 2 holds nothing to compare them
+//! with), so smoothness extends the flow of their neighbours.
 //!
 //! Each fixed-point (outer) iteration freezes the robust weights Ψ' at the current dw and solves
 //! the resulting linear system with a few SOR sweeps (red–black order, relaxation ω, each

@@ -10,11 +10,12 @@ export const $ = (id) => document.getElementById(id);
 const URL_OPTIONS = new URLSearchParams(location.search);
 /** ?backend=auto|webgpu|webgl2 picks the viewer's graphics backend. */
 export const BACKEND = URL_OPTIONS.get('backend') ?? 'auto';
+const ASKED_WORKER = URL_OPTIONS.get('worker');
 /**
  * ?worker=full runs the pipeline with the full wasm build instead of the lean one; ?worker=scalar
  * with the lean build without wasm SIMD, even where the browser has SIMD (www/worker.js).
  */
-export const WORKER_MODULE = ['full', 'scalar'].includes(URL_OPTIONS.get('worker')) ? URL_OPTIONS.get('worker') : 'lean';
+export const WORKER_MODULE = ['full', 'scalar'].includes(ASKED_WORKER) ? ASKED_WORKER : 'lean';
 /**
  * ?threads=N: at most N workers make the fusion's members at once (www/worker.js; 1: the
  * pipeline's worker alone, for measurements); null: as many as the machine's cores, up to 4.
