@@ -100,10 +100,10 @@ export async function takeFiles(fileList) {
 
 /**
  * Decodes an image file at the working size (`decodeFile`) with its EXIF facts, read by the
- * library.
+ * library. `byLibrary` is the library's decode of it (`decodeByLibrary`) when already started.
  */
-export async function decodeImage(file) {
-  const decoded = await decodeFile(file, maxSide());
+export async function decodeImage(file, byLibrary = decodeByLibrary(file, maxSide())) {
+  const decoded = await decodeFile(file, byLibrary);
   let { exif } = decoded;
   if (exif === null) {
     const bytes = await file.arrayBuffer();
@@ -114,27 +114,40 @@ export async function decodeImage(file) {
 
 /**
  * Decodes `file` upright at the working size for `side` (long side): a JPEG by the library's
- * DCT-scaled decoder in a worker of its own (src/jpeg.rs; no full-size image of the photo is
- * ever made), anything else, and a JPEG that decoder refuses (CMYK, arithmetic coding, damaged),
- * by the browser. Resolves to { bitmap, size: the photo's upright [width, height], exif (null
- * when not read yet), decoder: 'library' | 'browser' }.
+ * DCT-scaled decoder in a worker of its own (`decodeByLibrary`, which may have started already),
+ * anything else, and a JPEG that decoder refuses (CMYK, arithmetic coding, damaged), by the
+ * browser. Resolves to { bitmap, size: the photo's upright [width, height], exif (null when not
+ * read yet), decoder: 'library' | 'browser' }.
  */
-async function decodeFile(file, side) {
-  let refused = '';
-  if (await isJpeg(file)) {
-    const decoded = await decodeJpeg(file, side);
-    if (!(decoded instanceof Error)) {
-      return decoded;
-    }
-    refused = ` (the library's JPEG decoder: ${decoded.message})`;
+async function decodeFile(file, byLibrary) {
+  const decoded = await byLibrary;
+  if (decoded.bitmap) {
+    return decoded;
   }
   try {
     const size = await imageSize(file);
-    return { bitmap: await decodeAt(file, size, side), size, exif: null, decoder: 'browser' };
+    return { bitmap: await decodeAt(file, size, decoded.side), size, exif: null, decoder: 'browser' };
   } catch {
     throw new Error(`${file.name} could not be decoded: the file is damaged or in a format this ` +
-      `browser cannot read${refused}.`);
+      `browser cannot read${decoded.refused}.`);
   }
+}
+
+/**
+ * `file` decoded upright at the working size for `side` by the library's DCT-scaled JPEG decoder
+ * (src/jpeg.rs: no full-size image of the photo is ever made, so two such decodes may run at
+ * once): `decodeFile`'s result, or { side, refused } where the browser must decode it (not a
+ * JPEG: `refused` empty; refused by the library: why, for the error message should the browser
+ * fail too).
+ */
+async function decodeByLibrary(file, side) {
+  if (!(await isJpeg(file))) {
+    return { side, refused: '' };
+  }
+  const decoded = await decodeJpeg(file, side);
+  return decoded instanceof Error ?
+    { side, refused: ` (the library's JPEG decoder: ${decoded.message})` } :
+    decoded;
 }
 
 /** Whether `file` starts as a JPEG does (SOI, then another marker), whatever its name or type. */
@@ -193,21 +206,26 @@ function decodeAt(file, [width, height], side) {
 }
 
 /**
- * Decodes image files one after the other (only one photo is ever held at full size). With
- * `wanted` (a function), stops before the next photo once it returns false (a newer drop or a
- * cancel) and rejects, closing what it decoded.
+ * Decodes image files: the library's JPEG decodes all at once, each in a worker of its own (they
+ * hold no full-size image), the browser's one after the other (only one photo is ever held at
+ * full size). With `wanted` (a function), stops before the next photo once it returns false (a
+ * newer drop or a cancel) and rejects, closing what it decoded.
  */
 export async function decodeImages(files, wanted = () => true) {
+  const side = maxSide();
+  const byLibrary = files.map((file) => decodeByLibrary(file, side));
   const frames = [];
   try {
-    for (const file of files) {
+    for (const [i, file] of files.entries()) {
       if (!wanted()) {
         throw new Error('the photos were replaced before they were decoded');
       }
-      frames.push(await decodeImage(file));
+      frames.push(await decodeImage(file, byLibrary[i]));
     }
   } catch (e) {
     frames.forEach(closeFrame);
+    // The library's decodes of the photos not made into frames: their bitmaps closed as they come.
+    byLibrary.slice(frames.length).forEach((decode) => decode.then((d) => d.bitmap?.close(), () => {}));
     throw e;
   }
   return frames;
@@ -273,7 +291,7 @@ export async function pixelsForRun(frame) {
   if (frame.side !== side && frame.source !== null) {
     const [w, h] = workingSize(frame.width, frame.height, side);
     if (w !== frame.bitmap.width || h !== frame.bitmap.height) {
-      const { bitmap, decoder } = await decodeFile(frame.source, side);
+      const { bitmap, decoder } = await decodeFile(frame.source, decodeByLibrary(frame.source, side));
       frame.bitmap.close();
       frame.bitmap = bitmap;
       frame.decoder = decoder;
