@@ -2,10 +2,11 @@
 //! (the paper's Sintel size) for each preset, native release, one thread, on the synthetic
 //! street scene. Run with `cargo bench --bench flow`; `cargo bench --bench flow -- medium` times
 //! only the named presets, `-- edges` only the last row: the motion-edge sharpening alone at
-//! full resolution, both directions (part of the high row; medium sharpens at half resolution,
-//! fast at a quarter). A second table gives each preset's peak heap memory (bytes the flow
-//! allocates at once at its peak, its result included, counted by the bench's allocator), in
-//! bytes per pixel: what the page's worker needs on top of the frames when it computes the flow.
+//! full resolution, both directions (part of the fine and high rows; medium sharpens at half
+//! resolution, fast at a quarter). A second table gives each preset's peak heap memory (bytes
+//! the flow allocates at once at its peak, its result included, counted by the bench's
+//! allocator), in bytes per pixel: what the page's worker needs on top of the frames when it
+//! computes the flow.
 
 mod common;
 

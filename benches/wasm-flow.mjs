@@ -13,7 +13,7 @@ if (!caseDir) {
   process.exit(2);
 }
 const runs = Number(runsArg ?? 5);
-const presets = presetArgs.length ? presetArgs : ['fast', 'medium', 'high'];
+const presets = presetArgs.length ? presetArgs : ['fast', 'medium', 'fine', 'high'];
 const frame1 = readPng(join(caseDir, 'frame1.png'));
 const frame2 = readPng(join(caseDir, 'frame2.png'));
 const size = `${frame1.width}×${frame1.height}`;

@@ -271,7 +271,7 @@ fn exif_intrinsics_and_defaults_as_json() {
     );
     assert_eq!(
         defaults["flowPresets"],
-        serde_json::json!(["fast", "medium", "high"])
+        serde_json::json!(["fast", "medium", "fine", "high"])
     );
     assert!(
         defaults["exports"]

@@ -29,6 +29,13 @@ pub enum Preset {
     Fast,
     /// Stops one level above full resolution (OpenCV's default).
     Medium,
+    /// Runs to full resolution with medium's patch grid and 3 fixed-point iterations of the
+    /// variational refinement instead of 5. On the synthetic street, crowd, creature and road
+    /// its error on the vectors that pass the forward–backward check is within 0.02 px of
+    /// high's (0.086–0.160 px against 0.081–0.142; medium's 0.166–0.236) in two thirds of
+    /// high's time (0.67 s against 1.04 s natively at 1024 × 436; medium 0.20 s), and the depth
+    /// from it is as accurate as from high's (docs/RESULTS.md, stop 58).
+    Fine,
     /// Runs to full resolution with a dense patch grid. The default: the soup's planes need
     /// sharp motion boundaries, and medium's half-resolution flow smears a mover's motion over
     /// the 5–10 px of background beside it (on the synthetic crowd, 27 % of the vectors that
@@ -40,23 +47,41 @@ pub enum Preset {
 
 impl Preset {
     /// Every preset, fastest first.
-    pub const ALL: [Preset; 3] = [Preset::Fast, Preset::Medium, Preset::High];
+    pub const ALL: [Preset; 4] = [Preset::Fast, Preset::Medium, Preset::Fine, Preset::High];
 
     /// Time of the flow both ways relative to `fast` (native, 1024 × 436: 49, 174 and 878 ms;
-    /// docs/RESULTS.md, Speed): how the progress of a run shares out passes of several presets.
+    /// fine's 0.65 s beside medium's 0.21 s, stop 58; docs/RESULTS.md, Speed): how the progress
+    /// of a run shares out passes of several presets.
     pub fn relative_cost(self) -> f32 {
         match self {
             Preset::Fast => 1.0,
             Preset::Medium => 3.5,
+            Preset::Fine => 11.0,
             Preset::High => 18.0,
         }
     }
 
-    /// The name used on the command line: `fast`, `medium` or `high`.
+    /// The preset a reconstruction asks for when this one's flow does not serve it (too little
+    /// of it trusted, the camera's motion ambiguous, too few scales pinned, no ground: see
+    /// `pipeline::reconstruct`): fast → medium → high, and fine → high. Fine is not on medium's
+    /// way: a pass of medium's wanting finer flow is made again from high's, as before fine
+    /// existed, so adding it changed no result. (Through fine, the crowd with the page's
+    /// settings and a focal length 25 % off took three passes instead of two: fine's pass
+    /// pinned 61 %, and high's came all the same, to the same depth, MRE 0.118.)
+    pub fn finer(self) -> Option<Preset> {
+        match self {
+            Preset::Fast => Some(Preset::Medium),
+            Preset::Medium | Preset::Fine => Some(Preset::High),
+            Preset::High => None,
+        }
+    }
+
+    /// The name used on the command line: `fast`, `medium`, `fine` or `high`.
     pub fn name(self) -> &'static str {
         match self {
             Preset::Fast => "fast",
             Preset::Medium => "medium",
+            Preset::Fine => "fine",
             Preset::High => "high",
         }
     }
@@ -68,7 +93,7 @@ impl Preset {
             .find(|p| p.name() == name)
             .ok_or_else(|| {
                 Error::InvalidParameter(format!(
-                    "unknown flow preset {name:?}; choose fast, medium or high"
+                    "unknown flow preset {name:?}; choose fast, medium, fine or high"
                 ))
             })
     }
@@ -99,19 +124,24 @@ pub struct DisParams {
 impl DisParams {
     /// The parameters of `preset`.
     pub fn preset(preset: Preset) -> Self {
-        let variational = VariationalParams::default();
-        // Fewer iterations need longer steps to travel as far.
-        let (patch_stride, finest_level, iterations, step_scale) = match preset {
-            Preset::Fast => (4, 2, 16, 0.3),
-            Preset::Medium => (3, 1, 25, 0.25),
-            Preset::High => (2, 0, 32, 0.2),
+        // Fewer iterations need longer steps to travel as far. The last number is the
+        // variational refinement's fixed-point iterations (VariationalParams::iterations).
+        let (patch_stride, finest_level, iterations, step_scale, fixed_point) = match preset {
+            Preset::Fast => (4, 2, 16, 0.3, 5),
+            Preset::Medium => (3, 1, 25, 0.25, 5),
+            // Medium's grid at full resolution, where each fixed-point iteration costs most.
+            Preset::Fine => (3, 0, 25, 0.25, 3),
+            Preset::High => (2, 0, 32, 0.2, 5),
         };
         DisParams {
             patch_stride,
             finest_level,
             iterations,
             step_scale,
-            variational,
+            variational: VariationalParams {
+                iterations: fixed_point,
+                ..VariationalParams::default()
+            },
         }
     }
 
@@ -571,6 +601,25 @@ mod tests {
         assert_eq!(levels(7, 100, &p), None);
         let fast = DisParams::preset(Preset::Fast);
         assert_eq!(levels(20, 40, &fast), Some((1, 1)));
+    }
+
+    #[test]
+    fn finer_flow_goes_fast_medium_high_and_from_fine_to_high() {
+        let chain: Vec<Preset> = std::iter::successors(Some(Preset::Fast), |p| p.finer()).collect();
+        assert_eq!(chain, [Preset::Fast, Preset::Medium, Preset::High]);
+        assert_eq!(Preset::Fine.finer(), Some(Preset::High));
+        // Fastest first, and fine runs medium's grid to full resolution.
+        assert!(
+            Preset::ALL
+                .windows(2)
+                .all(|p| p[0].relative_cost() < p[1].relative_cost())
+        );
+        let fine = DisParams::preset(Preset::Fine);
+        assert_eq!(levels(1024, 436, &fine), Some((0, 5)));
+        assert_eq!(
+            fine.patch_stride,
+            DisParams::preset(Preset::Medium).patch_stride
+        );
     }
 
     #[test]

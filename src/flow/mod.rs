@@ -115,14 +115,11 @@ impl FlowParams {
         Ok(())
     }
 
-    /// The next finer preset (fast → medium → high) with this forward–backward tolerance, when
-    /// the DIS parameters are those of a preset other than `high`; `None` otherwise (custom
-    /// parameters are kept as given).
+    /// The next finer preset ([`Preset::finer`]: fast → medium → high, fine → high) with this
+    /// forward–backward tolerance, when the DIS parameters are those of a preset other than
+    /// `high`; `None` otherwise (custom parameters are kept as given).
     pub fn finer(&self) -> Option<FlowParams> {
-        let at = Preset::ALL
-            .iter()
-            .position(|&p| Some(p) == self.named_preset())?;
-        let next = *Preset::ALL.get(at + 1)?;
+        let next = self.named_preset()?.finer()?;
         Some(FlowParams {
             dis: DisParams::preset(next),
             ..*self

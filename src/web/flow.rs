@@ -63,9 +63,9 @@ impl FlowResult {
 }
 
 /// Dense optical flow both ways between two RGBA frames of `width × height` pixels with the
-/// preset `"fast"`, `"medium"` or `"high"`. `progress`, when given, is called with the share of
-/// the work done (0 to 1). Throws an `Error` with a readable message for frames of the wrong
-/// length, different sizes, frames smaller than 8 pixels a side or an unknown preset.
+/// preset `"fast"`, `"medium"`, `"fine"` or `"high"`. `progress`, when given, is called with the
+/// share of the work done (0 to 1). Throws an `Error` with a readable message for frames of the
+/// wrong length, different sizes, frames smaller than 8 pixels a side or an unknown preset.
 #[wasm_bindgen(js_name = computeFlow)]
 pub fn compute_flow(
     rgba1: &[u8],

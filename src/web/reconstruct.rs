@@ -51,7 +51,7 @@ pub struct RunOptions {
     pub params: Params,
     /// Bound on the long side of the working resolution, in pixels.
     pub max_side: usize,
-    /// Preset of the computed flow: `"fast"`, `"medium"` or `"high"`.
+    /// Preset of the computed flow: `"fast"`, `"medium"`, `"fine"` or `"high"`.
     pub flow_preset: Preset,
     /// The user's intrinsics in pixels of the input images; `null` takes frame 1's EXIF focal
     /// length, else the default guess.

@@ -28,7 +28,7 @@ pub struct Args {
     /// forward–backward check are drawn darker.
     #[arg(long)]
     viz: Option<PathBuf>,
-    /// Speed/accuracy preset: fast, medium or high.
+    /// Speed/accuracy preset: fast, medium, fine or high.
     #[arg(long, default_value_t = Preset::default().name().to_string())]
     preset: String,
     /// Instead of two frames, score the flow on these case folders (frame1.png, frame2.png,

@@ -13,8 +13,8 @@ use superpixel_soup::{Error, Params, Result};
 /// Options that set pipeline parameters; the rest keep `Params::default()`.
 #[derive(clap::Args)]
 pub struct PipelineArgs {
-    /// Preset of the computed flow: fast, medium or high (finer pyramid levels, denser patches
-    /// and more iterations are slower and usually more accurate).
+    /// Preset of the computed flow: fast, medium, fine or high (finer pyramid levels, denser
+    /// patches and more iterations are slower and usually more accurate).
     #[arg(long, default_value_t = Preset::default().name().to_string())]
     pub preset: String,
     /// Requested number of SLIC superpixels (the pieces of the soup; the result is within a few
