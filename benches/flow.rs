@@ -79,7 +79,7 @@ fn time_edges(frame1: &Frame, frame2: &Frame) {
         sharpen_motion_edges(&pair.backward, frame2, &edges)
     });
     common::print_row(
-        "motion-edge sharpening at full resolution, both directions (in the high row)",
+        "motion-edge sharpening at full resolution, both directions (in the fine and high rows)",
         "1024×436",
         &times,
     );

@@ -80,9 +80,9 @@ pub struct Params {
     /// ([`crate::soup::ensemble`]).
     pub ensemble: EnsembleParams,
     /// A share in [0, 1]: when less than this share of the pixels passes the forward–backward
-    /// check, the flow is computed again with the next finer preset (fast → medium → high) and
-    /// the pass with the most trusted pixels is kept; 0 never computes it again, 1 always goes on
-    /// to `high`. The default preset is `high`, which has no finer one, so this acts when a
+    /// check, the flow is computed again with the next finer preset (fast → medium → high; fine →
+    /// high) and the pass with the most trusted pixels is kept; 0 never computes it again, 1
+    /// always goes on to `high`. The default preset is `high`, which has no finer one, so this acts when a
     /// coarser preset is chosen. 0.75: on every case measured but one, 83–94 % passes with
     /// `medium`; on FlyingThings3D (motions of 65–85 px) 65 % does, and its depth error with
     /// `medium` swings between 0.58 and 1.44 with the superpixel count (1200–1700) against

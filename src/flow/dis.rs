@@ -33,8 +33,8 @@ pub enum Preset {
     /// variational refinement instead of 5. On the synthetic street, crowd, creature and road
     /// its error on the vectors that pass the forward–backward check is within 0.02 px of
     /// high's (0.086–0.160 px against 0.081–0.142; medium's 0.166–0.236) in two thirds of
-    /// high's time (0.67 s against 1.04 s natively at 1024 × 436; medium 0.20 s), and the depth
-    /// from it is as accurate as from high's (docs/RESULTS.md, stop 58).
+    /// high's time (675 ms against 1045 ms, `cargo bench --bench flow`; medium 205 ms), and the
+    /// depth from it is as accurate as from high's (docs/RESULTS.md, stop 58).
     Fine,
     /// Runs to full resolution with a dense patch grid. The default: the soup's planes need
     /// sharp motion boundaries, and medium's half-resolution flow smears a mover's motion over
@@ -50,7 +50,7 @@ impl Preset {
     pub const ALL: [Preset; 4] = [Preset::Fast, Preset::Medium, Preset::Fine, Preset::High];
 
     /// Time of the flow both ways relative to `fast` (native, 1024 × 436: 49, 174 and 878 ms;
-    /// fine's 0.65 s beside medium's 0.21 s, stop 58; docs/RESULTS.md, Speed): how the progress
+    /// fine's 675 ms beside medium's 205 ms, stop 58; docs/RESULTS.md, Speed): how the progress
     /// of a run shares out passes of several presets.
     pub fn relative_cost(self) -> f32 {
         match self {

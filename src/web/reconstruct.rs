@@ -72,7 +72,9 @@ pub struct RunOptions {
 /// The page's flow preset: `medium`, not the library's default `high`. In a browser tab the
 /// high preset's full-resolution levels raise the tab's peak memory on a 12 MP photo pair from
 /// 370 to 456 MiB (worker memory 80 → 157 MiB), above the page's 400 MiB budget, and the end
-/// to end time from 4.1 to 5.3 s (`node benches/page.mjs`); the parameters panel offers `high`.
+/// to end time from 4.1 to 5.3 s (`node benches/page.mjs`, stop 48's flow; the flow's peak is
+/// lower since). The parameters panel offers `high` and `fine` (full resolution, high's accuracy
+/// in two thirds of its time; with it a 12 MP pair peaked at 394–403 MiB at stop 58).
 /// A run whose first pass pins too few scales, leaves the camera's motion ambiguous or finds no
 /// ground makes a second pass with `high` all the same ([`Params::min_pinned_share`],
 /// [`Params::finer_without_ground`]): an answer worse than a constant depth costs more than the

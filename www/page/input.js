@@ -109,7 +109,7 @@ export async function decodeImage(file, byLibrary = decodeByLibrary(file, maxSid
     const bytes = await file.arrayBuffer();
     ({ exif } = await page.pipeline.request('exif', { bytes }, [bytes]));
   }
-  return makeFrame(file.name, decoded.bitmap, file, exif, decoded.size, decoded.decoder);
+  return makeFrame(file.name, decoded.bitmap, file, exif, decoded.size, decoded.decoder, decoded.side);
 }
 
 /**
@@ -117,7 +117,7 @@ export async function decodeImage(file, byLibrary = decodeByLibrary(file, maxSid
  * DCT-scaled decoder in a worker of its own (`decodeByLibrary`, which may have started already),
  * anything else, and a JPEG that decoder refuses (CMYK, arithmetic coding, damaged), by the
  * browser. Resolves to { bitmap, size: the photo's upright [width, height], exif (null when not
- * read yet), decoder: 'library' | 'browser' }.
+ * read yet), decoder: 'library' | 'browser', side: the bound it was decoded for }.
  */
 async function decodeFile(file, byLibrary) {
   const decoded = await byLibrary;
@@ -126,7 +126,8 @@ async function decodeFile(file, byLibrary) {
   }
   try {
     const size = await imageSize(file);
-    return { bitmap: await decodeAt(file, size, decoded.side), size, exif: null, decoder: 'browser' };
+    const bitmap = await decodeAt(file, size, decoded.side);
+    return { bitmap, size, exif: null, decoder: 'browser', side: decoded.side };
   } catch {
     throw new Error(`${file.name} could not be decoded: the file is damaged or in a format this ` +
       `browser cannot read${decoded.refused}.`);
@@ -147,7 +148,7 @@ async function decodeByLibrary(file, side) {
   const decoded = await decodeJpeg(file, side);
   return decoded instanceof Error ?
     { side, refused: ` (the library's JPEG decoder: ${decoded.message})` } :
-    decoded;
+    { ...decoded, side };
 }
 
 /** Whether `file` starts as a JPEG does (SOI, then another marker), whatever its name or type. */
@@ -214,6 +215,8 @@ function decodeAt(file, [width, height], side) {
 export async function decodeImages(files, wanted = () => true) {
   const side = maxSide();
   const byLibrary = files.map((file) => decodeByLibrary(file, side));
+  // Awaited in order below; a later photo's failure must not go unhandled meanwhile.
+  byLibrary.forEach((decode) => decode.catch(() => {}));
   const frames = [];
   try {
     for (const [i, file] of files.entries()) {
@@ -268,10 +271,11 @@ async function shrink(full, side) {
  * A frame of `full` (the decoded pixels of `source`, or a video frame when `source` is null;
  * closed here unless already at the working size) whose own size is `width × height`: a
  * thumbnail and its pixels at the working size (`bitmap`, for `side`, the long side it was made
- * for); `decoder` tells who decoded it ('library', 'browser', or null for a video frame).
+ * for: the bound a photo was decoded for, else the form's); `decoder` tells who decoded it
+ * ('library', 'browser', or null for a video frame).
  */
-async function makeFrame(name, full, source, exif, [width, height] = [full.width, full.height], decoder = null) {
-  const side = maxSide();
+async function makeFrame(name, full, source, exif, [width, height] = [full.width, full.height], decoder = null,
+  side = maxSide()) {
   const bitmap = await shrink(full, side);
   const scale = Math.min(1, THUMBNAIL / Math.max(bitmap.width, bitmap.height));
   const thumbnail = await createImageBitmap(bitmap, {
