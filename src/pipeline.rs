@@ -82,11 +82,11 @@ pub struct Params {
     /// A share in [0, 1]: when less than this share of the pixels passes the forward–backward
     /// check, the flow is computed again with the next finer preset (fast → medium → high; fine →
     /// high) and the pass with the most trusted pixels is kept; 0 never computes it again, 1
-    /// always goes on to `high`. The default preset is `high`, which has no finer one, so this acts when a
-    /// coarser preset is chosen. 0.75: on every case measured but one, 83–94 % passes with
-    /// `medium`; on FlyingThings3D (motions of 65–85 px) 65 % does, and its depth error with
-    /// `medium` swings between 0.58 and 1.44 with the superpixel count (1200–1700) against
-    /// 0.52–0.72 with `high`. Given flow is never recomputed.
+    /// always goes on to `high`. The default preset is `high`, which has no finer one, so this
+    /// acts when a coarser preset is chosen. 0.75: on every case measured but one, 83–94 %
+    /// passes with `medium`; on FlyingThings3D (motions of 65–85 px) 65 % does, and its depth
+    /// error with `medium` swings between 0.58 and 1.44 with the superpixel count (1200–1700)
+    /// against 0.52–0.72 with `high`. Given flow is never recomputed.
     pub min_reliable_flow: f64,
     /// A share in [0, 1]: when the depths of less than this share of the pixels are pinned
     /// (their superpixel's confidence, `depth_confidence`, at least `scales.min_confidence`:

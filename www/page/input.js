@@ -113,10 +113,10 @@ export async function decodeImage(file, byLibrary = decodeByLibrary(file, maxSid
 }
 
 /**
- * Decodes `file` upright at the working size for `side` (long side): a JPEG by the library's
- * DCT-scaled decoder in a worker of its own (`decodeByLibrary`, which may have started already),
- * anything else, and a JPEG that decoder refuses (CMYK, arithmetic coding, damaged), by the
- * browser. Resolves to { bitmap, size: the photo's upright [width, height], exif (null when not
+ * Decodes `file` upright at the working size for the bound (long side) `byLibrary` was started
+ * with: a JPEG by the library's DCT-scaled decoder (`byLibrary`, the promise of
+ * `decodeByLibrary`, which may have started already), anything else, and a JPEG that decoder
+ * refuses (CMYK, arithmetic coding, damaged), by the browser. Resolves to { bitmap, size: the photo's upright [width, height], exif (null when not
  * read yet), decoder: 'library' | 'browser', side: the bound it was decoded for }.
  */
 async function decodeFile(file, byLibrary) {
