@@ -19,9 +19,9 @@
 //!
 //! Intensities are grey levels in [0, 255]; flow in pixels of the level; derivatives are true
 //! derivatives (OpenCV's unnormalised [−1, 0, 1] kernels make them twice as large, which halves
-//! every increment). The linear system's arrays are flat and padded by one pixel on every side
-//! (stride w + 2): border pixels hold zero increments and zero smoothness weights, so the inner
-//! loops need no bounds logic. The equations and the derivatives they are made from are made a
+//! every increment). The linear system's arrays are padded by one pixel on every side (rows of
+//! w + 2, each row an allocation of its own): border pixels hold zero increments and zero
+//! smoothness weights, so the inner loops need no bounds logic. The equations and the derivatives they are made from are made a
 //! row at a time from the few rows around it, as each fixed-point iteration needs them.
 
 use super::pyramid::{Level, sample_clamped};
@@ -336,10 +336,39 @@ fn y_differences(above: &[f32], below: &[f32], scale: f32, dy: &mut [f32]) {
     }
 }
 
-/// Row `r` of the base flow (u, v) (`w` values) in [`System`]'s padded layout (`flow`, stride
-/// w + 2): padded row r + 1, from column 1.
-fn base_row(flow: &[[f32; 2]], w: usize, r: usize) -> &[[f32; 2]] {
-    &flow[(r + 1) * (w + 2) + 1..][..w]
+/// Row `r` of the base flow (u, v) (`w` values) in [`System`]'s padded layout: padded row
+/// r + 1, from column 1.
+fn base_row(flow: &PaddedRows<[f32; 2]>, w: usize, r: usize) -> &[[f32; 2]] {
+    &flow.row(r + 1)[1..][..w]
+}
+
+/// A padded field of [`System`], one allocation per row. Row-sized pieces fit the gaps other
+/// arrays leave: in wasm, where the allocator grows the memory by a whole request whenever no
+/// gap holds it, one array of a full level's coefficients (28 bytes a pixel) made the flow's
+/// memory grow by a third more than it ever held at once.
+struct PaddedRows<T> {
+    rows: Vec<Vec<T>>,
+}
+
+impl<T: Copy> PaddedRows<T> {
+    /// `count` rows of `stride` copies of `value`.
+    fn filled(stride: usize, count: usize, value: T) -> Self {
+        PaddedRows {
+            rows: (0..count).map(|_| vec![value; stride]).collect(),
+        }
+    }
+
+    /// Row `y`.
+    fn row(&self, y: usize) -> &[T] {
+        &self.rows[y]
+    }
+
+    /// Rows y − 1 and y + 1 to read and row y to write (0 < y < count − 1).
+    fn around_mut(&mut self, y: usize) -> (&[T], &mut [T], &[T]) {
+        let (above, rest) = self.rows.split_at_mut(y);
+        let (row, below) = rest.split_at_mut(1);
+        (&above[y - 1], &mut row[0], &below[0])
+    }
 }
 
 /// One pixel's row of the linear system of a fixed-point iteration:
@@ -366,10 +395,10 @@ struct System {
     w: usize,
     h: usize,
     /// Base flow (u, v), borders replicating the edge.
-    flow: Vec<[f32; 2]>,
+    flow: PaddedRows<[f32; 2]>,
     /// Increments (du, dv).
-    increment: Vec<[f32; 2]>,
-    coefficients: Vec<Coefficients>,
+    increment: PaddedRows<[f32; 2]>,
+    coefficients: PaddedRows<Coefficients>,
 }
 
 impl System {
@@ -377,21 +406,26 @@ impl System {
     /// released once copied, before the increments and coefficients are allocated.
     fn new(w: usize, h: usize, u: Vec<f32>, v: Vec<f32>) -> Self {
         let stride = w + 2;
-        let mut flow = vec![[0.0; 2]; stride * (h + 2)];
-        for py in 0..h + 2 {
-            let y = py.saturating_sub(1).min(h - 1);
-            for px in 0..stride {
-                let i = y * w + px.saturating_sub(1).min(w - 1);
-                flow[py * stride + px] = [u[i], v[i]];
-            }
-        }
+        let flow = PaddedRows {
+            rows: (0..h + 2)
+                .map(|py| {
+                    let y = py.saturating_sub(1).min(h - 1);
+                    (0..stride)
+                        .map(|px| {
+                            let i = y * w + px.saturating_sub(1).min(w - 1);
+                            [u[i], v[i]]
+                        })
+                        .collect()
+                })
+                .collect(),
+        };
         drop((u, v));
         System {
             w,
             h,
             flow,
-            increment: vec![[0.0; 2]; stride * (h + 2)],
-            coefficients: vec![Coefficients::default(); stride * (h + 2)],
+            increment: PaddedRows::filled(stride, h + 2, [0.0; 2]),
+            coefficients: PaddedRows::filled(stride, h + 2, Coefficients::default()),
         }
     }
 
@@ -406,11 +440,10 @@ impl System {
             coefficients,
         } = self;
         drop(coefficients);
-        let stride = w + 2;
         let (mut u, mut v) = (Vec::with_capacity(w * h), Vec::with_capacity(w * h));
         for y in 1..=h {
-            let base = &flow[y * stride + 1..][..w];
-            let step = &increment[y * stride + 1..][..w];
+            let base = &flow.row(y)[1..][..w];
+            let step = &increment.row(y)[1..][..w];
             for (f, d) in base.iter().zip(step) {
                 u.push(f[0] + d[0]);
                 v.push(f[1] + d[1]);
@@ -427,29 +460,19 @@ impl System {
         let (half_alpha, half_delta, half_gamma) =
             (0.5 * params.alpha, 0.5 * params.delta, 0.5 * params.gamma);
         let (w, h) = (self.w, self.h);
-        let stride = w + 2;
         let System {
             flow,
             increment,
             coefficients,
             ..
         } = self;
-        let mut equations = vec![[0.0; 9]; stride];
+        let mut equations = vec![[0.0; 9]; w + 2];
         for y in 1..=h {
-            let row = y * stride;
-            let (flow_up, flow_mid, flow_down) = (
-                &flow[row - stride..][..stride],
-                &flow[row..][..stride],
-                &flow[row + stride..][..stride],
-            );
-            let (increment_mid, increment_down) = (
-                &increment[row..][..stride],
-                &increment[row + stride..][..stride],
-            );
+            let (flow_up, flow_mid, flow_down) = (flow.row(y - 1), flow.row(y), flow.row(y + 1));
+            let (increment_mid, increment_down) = (increment.row(y), increment.row(y + 1));
             // This row's equations, indexed like the padded row (column 0 unused).
             derivatives.equations(y - 1, |r| base_row(flow, w, r), &mut equations[1..]);
-            let (above, rest) = coefficients.split_at_mut(row);
-            let (coefficients_up, coefficients_mid) = (&above[row - stride..], &mut rest[..stride]);
+            let (coefficients_up, coefficients_mid, _) = coefficients.around_mut(y);
             // Weight of the edge to the left neighbour: the previous pixel's right edge.
             let mut wl = 0.0;
             for x in 1..=w {
@@ -516,14 +539,12 @@ impl System {
     /// One SOR half-sweep over the pixels with (x + y) % 2 == `colour` (red–black ordering: the
     /// pixels of one colour depend only on the other's, so their updates are independent).
     fn sor_half_sweep(&mut self, omega: f32, colour: usize) {
-        let (w, stride) = (self.w, self.w + 2);
+        let w = self.w;
         for y in 1..=self.h {
             // Rows y − 1, y, y + 1 of the increments; only row y is written.
-            let (above, rest) = self.increment.split_at_mut(y * stride);
-            let (row, below) = rest.split_at_mut(stride);
-            let (up, down) = (&above[(y - 1) * stride..], &below[..stride]);
-            let coefficients = &self.coefficients[y * stride..][..stride];
-            let coefficients_up = &self.coefficients[(y - 1) * stride..][..stride];
+            let (up, row, down) = self.increment.around_mut(y);
+            let coefficients = self.coefficients.row(y);
+            let coefficients_up = self.coefficients.row(y - 1);
             // Column x = 1 opens the padded row; start at the first pixel of this colour.
             let mut x = 1 + usize::from((1 + y) % 2 != colour);
             while x <= w {
