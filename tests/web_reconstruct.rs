@@ -253,11 +253,11 @@ fn exif_intrinsics_and_defaults_as_json() {
 
     let defaults: serde_json::Value = serde_json::from_str(&page_defaults().unwrap()).unwrap();
     // The page's defaults are the library's, every parameter of them, but for the flow preset
-    // (medium in a browser tab, for memory) and the kept reconstruction's refinement (the fused
-    // members', for time).
+    // (fine in a browser tab: high's depth in less time) and the kept reconstruction's
+    // refinement (the fused members', for time).
     assert_eq!(defaults["options"]["maxSide"], DEFAULT_MAX_SIDE);
     assert_eq!(defaults["options"]["flowPreset"], PAGE_FLOW_PRESET.name());
-    assert_eq!(PAGE_FLOW_PRESET, Preset::Medium);
+    assert_eq!(PAGE_FLOW_PRESET, Preset::Fine);
     assert_eq!(
         defaults["options"]["params"],
         serde_json::to_value(page_params()).unwrap()

@@ -69,17 +69,21 @@ pub struct RunOptions {
     pub photo_sizes: Option<[[usize; 2]; 2]>,
 }
 
-/// The page's flow preset: `medium`, not the library's default `high`. In a browser tab the
-/// high preset's full-resolution levels raise the tab's peak memory on a 12 MP photo pair from
-/// 370 to 456 MiB (worker memory 80 → 157 MiB), above the page's 400 MiB budget, and the end
-/// to end time from 4.1 to 5.3 s (`node benches/page.mjs`, stop 48's flow; the flow's peak is
-/// lower since). The parameters panel offers `high` and `fine` (full resolution, high's accuracy
-/// in two thirds of its time; with it a 12 MP pair peaked at 394–403 MiB at stop 58).
+/// The page's flow preset: `fine`, not the library's default `high`. Both compute the flow at
+/// full resolution, and fine's depth is as accurate as high's (five-seed means with the page's
+/// settings within 0.004 of the command line's on every evaluation case, docs/RESULTS.md stop
+/// 58) in two thirds of the flow's time. Against `medium` (half resolution) fine halves the depth
+/// error on static-room, the street, the creature and the table, and only with it does
+/// static-room meet its 0.015 target in the page's settings. Its price (`node
+/// benches/page.mjs`, stop 59, runs alternated with medium): a 12 MP photo pair's peak tab
+/// memory 373–374 → 390–397 MiB (budget 400; 394–403 before the refinement's arrays were
+/// allocated a row at a time) and its end to end time 4.7–5.2 → 5.7 s; a 1024 × 436 pair 3.1 →
+/// 3.6 s.
 /// A run whose first pass pins too few scales, leaves the camera's motion ambiguous or finds no
-/// ground makes a second pass with `high` all the same ([`Params::min_pinned_share`],
+/// ground makes a second pass with `high` ([`Params::min_pinned_share`],
 /// [`Params::finer_without_ground`]): an answer worse than a constant depth costs more than the
 /// memory and time, which that pass then takes.
-pub const PAGE_FLOW_PRESET: Preset = Preset::Medium;
+pub const PAGE_FLOW_PRESET: Preset = Preset::Fine;
 
 /// The page's refinement of the kept reconstruction: the members' (2 iterations, 8 particles,
 /// [`crate::soup::ensemble::EnsembleParams`]) instead of the library's 6 and 16. With five

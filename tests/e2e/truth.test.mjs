@@ -96,12 +96,12 @@ test('ground truth scored in the page equals soup eval, and bad files are explai
   // build's math functions happen to take another branch than native's: a different MRE.)
   const intrinsics = { fx: '614.4', fy: '614.4', cx: '383.5', cy: '163.5' };
   writeFileSync(path.join(caseDir, 'intrinsics.txt'), `${Object.values(intrinsics).join(' ')}\n`);
-  // The page's flow preset (`PAGE_FLOW_PRESET` in src/web/reconstruct.rs) is medium, and it
+  // The page's flow preset (`PAGE_FLOW_PRESET` in src/web/reconstruct.rs) is fine, and it
   // refines with 2 iterations of 8 particles (`page_params`); the command line's defaults are
   // high and 6 of 16.
   const pageParams = path.join(work, 'page-params.json');
   writeFileSync(pageParams, JSON.stringify({ refine: { iterations: 2, particles: 8 } }));
-  soup('eval', caseDir, '--preset', 'medium', '--params', pageParams, '--json', path.join(work, 'eval.json'));
+  soup('eval', caseDir, '--preset', 'fine', '--params', pageParams, '--json', path.join(work, 'eval.json'));
   const cli = JSON.parse(readFileSync(path.join(work, 'eval.json'), 'utf8'))[0].metrics;
   const pfm = readFileSync(path.join(caseDir, 'depth1.pfm'));
   const dpt = writeDpt(readPfm(pfm));
