@@ -154,6 +154,11 @@ pub enum FlowInput {
     /// Computed from the two frames by [`compute_flow`] (DIS with variational refinement, both
     /// ways); vectors failing the forward–backward check are not trusted.
     Compute(FlowParams),
+    /// `Compute` with these parameters, whose first flow was computed already, at the working
+    /// resolution: by [`compute_flow`], or by its two directions apart
+    /// ([`crate::flow::compute_direction`]; the page computes one in a helper worker). Later
+    /// passes compute their finer flow as `Compute` does.
+    Computed(FlowParams, Box<FlowPair>),
 }
 
 /// Milliseconds per stage and the solve's numbers, for `report.json` and the page.
@@ -356,7 +361,10 @@ pub fn reconstruct_unfused(
             rec.report.notes.extend(note);
             Ok(rec)
         }
-        FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, params, progress),
+        FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, None, params, progress),
+        FlowInput::Computed(first, flow) => {
+            reconstruct_until_pinned(pair, first, Some(flow), params, progress)
+        }
     }
 }
 
@@ -437,7 +445,8 @@ impl Pass {
     }
 }
 
-/// Passes of [`reconstruct_from`] from the flow of `first`, then of the next finer preset while
+/// Passes of [`reconstruct_from`] from the flow of `first` (`first_flow` when it was computed
+/// already), then of the next finer preset while
 /// the last pass pins less than [`Params::min_pinned_share`] (flow too coarse to show where
 /// movers meet the world leaves their scales to guesses), its camera motion is ambiguous
 /// (flow too coarse to tell the camera's motion from a compromise with the movers) or it found
@@ -456,10 +465,15 @@ impl Pass {
 fn reconstruct_until_pinned(
     pair: &FramePair,
     first: FlowParams,
+    first_flow: Option<Box<FlowPair>>,
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
-    let first_pass = reconstruct_from(pair, FlowInput::Compute(first), params, None, progress)?;
+    let input = match first_flow {
+        Some(flow) => FlowInput::Computed(first, flow),
+        None => FlowInput::Compute(first),
+    };
+    let first_pass = reconstruct_from(pair, input, params, None, progress)?;
     let mut best = Pass::of(&first_pass, first);
     let mut last = best;
     let mut notes = first_pass.report.notes.clone();
@@ -787,6 +801,18 @@ fn reconstruct_from(
             let (computed, used) = trusted_flow(
                 pair,
                 flow_params,
+                None,
+                params.min_reliable_flow,
+                &mut notes,
+                &mut |f| progress(Stage::Flow, f),
+            )?;
+            (computed.forward, computed.reliable, Some(used))
+        }
+        FlowInput::Computed(flow_params, first) => {
+            let (computed, used) = trusted_flow(
+                pair,
+                flow_params,
+                Some(*first),
                 params.min_reliable_flow,
                 &mut notes,
                 &mut |f| progress(Stage::Flow, f),
@@ -1199,7 +1225,7 @@ where
     slots.into_iter().flatten().collect()
 }
 
-/// Flow by [`compute_flow`] with `params`, computed again with the next finer preset
+/// Flow by [`compute_flow`] with `params` (`first` when it was computed already), computed again with the next finer preset
 /// ([`FlowParams::finer`]) while less than `min_reliable` of the pixels passes the
 /// forward–backward check (large motions that the coarser preset tracks badly); the pass with
 /// the most trusted pixels is kept, with the parameters it used. Each new pass adds a note, and
@@ -1212,23 +1238,40 @@ where
 fn trusted_flow(
     pair: &FramePair,
     params: FlowParams,
+    first: Option<FlowPair>,
     min_reliable: f64,
     notes: &mut Vec<String>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<(FlowPair, FlowParams)> {
+    if let Some(given) = &first {
+        let size = pair.frame1.size();
+        for field in [&given.forward, &given.backward] {
+            if field.size() != size {
+                return Err(Error::SizeMismatch {
+                    w1: size.0,
+                    h1: size.1,
+                    w2: field.width(),
+                    h2: field.height(),
+                });
+            }
+        }
+    }
     let mut start = 0.0f32;
-    let mut run = |p: &FlowParams| -> Result<(f64, FlowPair)> {
+    let mut run = |p: &FlowParams, given: Option<FlowPair>| -> Result<(f64, FlowPair)> {
         let cost = |p: &FlowParams| p.named_preset().map_or(1.0, Preset::relative_cost);
         let next = p.finer().filter(|_| min_reliable > 0.0);
         let share = next.map_or(1.0, |f| cost(p) / (cost(p) + cost(&f)));
         let (from, span) = (start, share * (1.0 - start));
-        let computed = compute_flow(&pair.frame1, &pair.frame2, p, &mut |f| {
-            progress(from + span * f)
-        })?;
+        let computed = match given {
+            Some(computed) => computed,
+            None => compute_flow(&pair.frame1, &pair.frame2, p, &mut |f| {
+                progress(from + span * f)
+            })?,
+        };
         start += span;
         Ok((trusted_share(&computed.reliable), computed))
     };
-    let (mut trusted, mut best) = run(&params)?;
+    let (mut trusted, mut best) = run(&params, first)?;
     let (mut best_share, mut best_params, mut used) = (trusted, params, params);
     while let Some(finer) = used.finer().filter(|_| trusted < min_reliable) {
         notes.push(format!(
@@ -1238,7 +1281,7 @@ fn trusted_flow(
             preset_name(&used),
             preset_name(&finer),
         ));
-        let (share, flow) = run(&finer)?;
+        let (share, flow) = run(&finer, None)?;
         if share > best_share {
             (best_share, best, best_params) = (share, flow, finer);
         }

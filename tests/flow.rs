@@ -10,7 +10,10 @@ use superpixel_soup::eval::{eval_case_dir, flow_metrics};
 use superpixel_soup::flow::colour::{flow_picture, max_radius, vector_colour};
 use superpixel_soup::flow::consistency::forward_backward_mask;
 use superpixel_soup::flow::edges::boundary_band;
-use superpixel_soup::flow::{EdgeParams, FlowField, FlowPair, FlowParams, Preset, compute_flow};
+use superpixel_soup::flow::{
+    EdgeParams, FlowField, FlowPair, FlowParams, Preset, compute_direction, compute_flow,
+    pair_from_directions,
+};
 use superpixel_soup::formats::case::read_case;
 use superpixel_soup::formats::flo;
 use superpixel_soup::grid::Grid;
@@ -356,6 +359,45 @@ fn every_preset_reports_progress_from_0_to_1() {
             preset.name()
         );
     }
+}
+
+#[test]
+fn directions_computed_apart_and_joined_are_the_flow_bit_for_bit() {
+    // The page computes one direction in a helper worker while its worker computes the other.
+    let scene = render(SceneKind::Crowd, 192, 96).unwrap();
+    let bits =
+        |f: &FlowField| -> Vec<u32> { f.data().iter().flat_map(|v| v.map(f32::to_bits)).collect() };
+    for preset in [Preset::Medium, Preset::Fine] {
+        let params = FlowParams::preset(preset);
+        let (one, two) = (&scene.frame1, &scene.frame2);
+        let whole = compute_flow(one, two, &params, &mut |_| {}).unwrap();
+        let mut seen = Vec::new();
+        let forward = compute_direction(one, two, &params, &mut |f| seen.push(f)).unwrap();
+        let backward = compute_direction(two, one, &params, &mut |_| {}).unwrap();
+        assert_eq!((seen.first(), seen.last()), (Some(&0.0), Some(&1.0)));
+        let joined = pair_from_directions(forward, backward, &params).unwrap();
+        assert_eq!(
+            bits(&joined.forward),
+            bits(&whole.forward),
+            "{}",
+            preset.name()
+        );
+        assert_eq!(
+            bits(&joined.backward),
+            bits(&whole.backward),
+            "{}",
+            preset.name()
+        );
+        assert_eq!(joined.reliable.data(), whole.reliable.data());
+    }
+    let small = Grid::filled(4, 4, [0u8; 3]);
+    let params = FlowParams::default();
+    assert!(matches!(
+        compute_direction(&small, &small, &params, &mut |_| {}),
+        Err(Error::TooSmall { .. })
+    ));
+    let other = Grid::filled(5, 4, [0.0f32; 2]);
+    assert!(pair_from_directions(Grid::filled(4, 4, [0.0; 2]), other, &params).is_err());
 }
 
 #[test]

@@ -16,8 +16,8 @@ use superpixel_soup::synth::{SceneKind, render};
 use superpixel_soup::web::members::MemberSource;
 use superpixel_soup::web::memory::failed_allocation;
 use superpixel_soup::web::reconstruct::{
-    FrameBuilder, PAGE_FLOW_PRESET, PageReconstruction, page_defaults, page_params, read_exif,
-    reconstruct, reconstruct_unfused, resolve_intrinsics_json,
+    FrameBuilder, PAGE_FLOW_PRESET, PageReconstruction, flow_direction, page_defaults, page_params,
+    read_exif, reconstruct, reconstruct_unfused, resolve_intrinsics_json,
 };
 use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
@@ -381,15 +381,57 @@ fn frames_decoded_smaller_keep_the_photos_size_for_outputs_and_checks() {
 }
 
 #[wasm_bindgen_test]
+fn flow_directions_come_both_or_neither_and_fit_the_frames() {
+    let s = render(SceneKind::Street, 64, 48).unwrap();
+    let options = options("{}");
+    let unfused = |forward, backward| {
+        reconstruct_unfused(
+            builder(&s.frame1),
+            builder(&s.frame2),
+            &options,
+            None,
+            forward,
+            backward,
+        )
+    };
+    let (name, message) =
+        name_and_message(unfused(Some(vec![0.0; 2 * 64 * 48]), None).err().unwrap());
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("both flow directions"), "{message}");
+    let short = || Some(vec![0.0; 10]);
+    let (_, message) = name_and_message(unfused(short(), short()).err().unwrap());
+    assert!(message.contains("10 numbers for 64×48"), "{message}");
+}
+
+#[wasm_bindgen_test]
 fn members_made_in_other_workers_fuse_to_the_same_result() {
-    // The worker's way (www/worker.js): the kept pass, each member's vote from the copied
-    // inputs (in a helper worker, here in turn), the votes added in the order of their counts,
-    // then the fusion; the same files and report as the one-call reconstruct, but for times.
+    // The worker's way (www/worker.js): the first flow's directions apart (one in a helper
+    // worker), the kept pass, each member's vote from the copied inputs (in a helper worker, here
+    // in turn), the votes added in the order of their counts, then the fusion; the same files
+    // and report as the one-call reconstruct, but for times.
     let s = render(SceneKind::Street, 256, 110).unwrap();
     let options = options("{}");
     let mut whole = run(&s.frame1, &s.frame2, &options).unwrap();
-    let mut parts =
-        reconstruct_unfused(builder(&s.frame1), builder(&s.frame2), &options, None).unwrap();
+    let direction = |backward| {
+        flow_direction(
+            builder(&s.frame1),
+            builder(&s.frame2),
+            &options,
+            backward,
+            None,
+        )
+        .unwrap()
+    };
+    let (forward, backward) = (direction(false), direction(true));
+    let mut parts = reconstruct_unfused(
+        builder(&s.frame1),
+        builder(&s.frame2),
+        &options,
+        None,
+        Some(forward),
+        Some(backward),
+    )
+    .unwrap();
     let inputs = parts.member_inputs();
     let counts = parts.member_counts().to_vec();
     assert_eq!(counts, vec![140, 160, 130, 170]);

@@ -158,7 +158,8 @@ export class Pipeline {
   /**
    * Frees the memory of the worker that just handed over a run's result (module comment):
    * replaces it by a fresh worker, which is given `inputs` ({ frames: ImageBitmaps, owned and
-   * closed here, options }) of that run again by `recompute`.
+   * closed here, options, flow: the result's first flow or null }) of that run again by
+   * `recompute` (given the flow, it need not compute it again: less time and memory).
    */
   release(inputs) {
     this.restart();
@@ -206,9 +207,10 @@ export class Pipeline {
       return this.recomputing ?? Promise.resolve();
     }
     if (this.recomputing === null) {
-      const { frames, options } = this.inputs;
-      this.inputs = null; // the frames go to the worker (transferred)
-      const recomputing = this.send('run', { frames, options, quiet: true }, frames).then(() => {}).finally(() => {
+      const { frames, options, flow = null } = this.inputs;
+      this.inputs = null; // the frames and flow go to the worker (transferred)
+      const transfer = flow === null ? frames : [...frames, flow.forward.buffer, flow.backward.buffer];
+      const recomputing = this.send('run', { frames, options, quiet: true, flow }, transfer).then(() => {}).finally(() => {
         if (this.recomputing === recomputing) {
           this.recomputing = null;
         }

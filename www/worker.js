@@ -13,8 +13,10 @@
 // MAX_THREADS − 1 helper workers (this same script with `?helper=1`, nested, given this
 // worker's compiled module), each makes some of the members (a `MemberSource` from a copy of
 // the run's inputs) while this worker makes the rest (`memberVote`), and this worker fuses the
-// votes (src/web/members.rs). The result is the same, bit for bit, however many make them. A
-// helper that cannot start or crashes leaves its members to this worker. `worker.js?threads=1`
+// votes (src/web/members.rs). Before that, while this worker computes the first flow from frame 1
+// to frame 2, the first helper computes it from frame 2 to frame 1 (`directionsApart`: each
+// direction is half the flow's time). The result is the same, bit for bit, however many make
+// them. A helper that cannot start or crashes leaves its work to this worker. `worker.js?threads=1`
 // (the page's `?threads=1`) makes every member here, one after the other.
 //
 // Requests (each with an `id`; answered by { type: 'reply', id, ... } or { type: 'error', id, ... }):
@@ -24,10 +26,12 @@
 //       decode, src/jpeg.rs; an error when the decoder refuses the file; www/pipeline.js sends it
 //       to a worker of its own)
 //   { type: 'intrinsics', width, height, focal35mm }        → { camera: { intrinsics, source } }
-//   { type: 'run', frames: [ImageBitmap, ImageBitmap], options, quiet }
+//   { type: 'run', frames: [ImageBitmap, ImageBitmap], options, quiet, flow }
 //       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below);
 //       `quiet: true` (the page computing a result it already has again, www/pipeline.js):
-//       no progress and no result in the reply, the reconstruction is only kept
+//       no progress and no result in the reply, the reconstruction is only kept; `flow`
+//       (optional): { forward, backward }, the first flow's directions as an earlier run of
+//       the same frames and options gave them in its result (`result.flow`)
 //   { type: 'cloud', soup: 'organised' | 'scaled' | 'unorganised' } → { cloud }
 //   { type: 'export', name }                                → { bytes: ArrayBuffer, mediaType }
 //   { type: 'score-depth', name, bytes, pngScale }          → { score, picture: RGBA at the
@@ -37,6 +41,8 @@
 //   { type: 'members', source: { options (JSON), memberInputs' arrays }, counts }
 //       → { type: 'vote', id, index, vote: { width, height, depth, pinned } | error }… (one per
 //       count, `index` its place in `counts`), then a reply (a helper's request)
+//   { type: 'backward-flow', frames: [{ width, height, data: RGBA }, …], options (JSON) }
+//       → { flow: Float32Array } (the run's first flow frame 2 → 1; a helper's request)
 // Unasked: { type: 'ready', version, defaults, build } once the module is loaded (`build`: the
 // name of the wasm build in www/pkg/ it loaded); { type: 'failed', message } when it cannot be
 // loaded. A helper (`?helper=1`) first posts { type: 'waiting' }
@@ -87,6 +93,29 @@ let current = null;
 /** Bytes of RGBA read from a canvas at a time (a few rows; a photo is never copied whole). */
 const STRIP_BYTES = 4 * 2 ** 20;
 
+/** The RGBA pixels of an ImageBitmap (closed here): { width, height, data }. */
+function pixelsOf(bitmap) {
+  const { width, height } = bitmap;
+  const canvas = new OffscreenCanvas(width, height);
+  const context = canvas.getContext('2d', { willReadFrequently: true });
+  context.drawImage(bitmap, 0, 0);
+  bitmap.close();
+  const { data } = context.getImageData(0, 0, width, height);
+  canvas.width = 0;
+  canvas.height = 0;
+  return { width, height, data };
+}
+
+/** A wasm FrameBuilder of RGBA `pixels` ({ width, height, data }), given in strips of rows. */
+function builderOf({ width, height, data }) {
+  const frame = new soup.FrameBuilder(width, height);
+  const rows = Math.max(1, Math.floor(STRIP_BYTES / (4 * width)));
+  for (let y = 0; y < height; y += rows) {
+    frame.pushRows(data.subarray(4 * width * y, 4 * width * Math.min(height, y + rows)));
+  }
+  return frame;
+}
+
 /** The pixels of an ImageBitmap (closed here) in a wasm FrameBuilder, read in strips of rows. */
 function readFrame(bitmap) {
   const { width, height } = bitmap;
@@ -120,15 +149,23 @@ function takeCloud(buffers) {
 
 const cloudTransfer = (c) => [c.positions1.buffer, c.positions2.buffer, c.colours.buffer, c.labels.buffer];
 
-async function run(id, { frames, options, quiet = false }) {
+async function run(id, { frames, options, quiet = false, flow: given = null }) {
   const clock = performance.now();
   current?.free();
   current = null;
   const [width, height] = [frames[0].width, frames[0].height];
-  const [one, two] = frames.map(readFrame);
+  const wanted = threadsFor(options, quiet, width, height) - 1;
+  // With helpers, the first flow's two directions are computed at once (directionsApart),
+  // from pixels held here; else the frames go to wasm in strips, never whole in JavaScript.
+  const pixels = wanted > 0 ? frames.map(pixelsOf) : null;
+  const [one, two] = pixels === null ? frames.map(readFrame) : [null, null];
   const pixelsMs = performance.now() - clock;
   let last = { stage: '', fraction: -1 };
+  let directionsDone = false;
   const progress = quiet ? undefined : (stage, fraction) => {
+    if (directionsDone && stage === 'flow' && last.stage === 'flow' && fraction < last.fraction) {
+      return; // the flow joined after its directions apart: no step back
+    }
     // At most ~50 messages per stage.
     if (stage !== last.stage || fraction - last.fraction >= 0.02 || fraction === 1) {
       last = { stage, fraction };
@@ -138,11 +175,16 @@ async function run(id, { frames, options, quiet = false }) {
   const start = performance.now();
   const json = JSON.stringify(options);
   let made;
+  let firstFlow = null;
   // A nested worker loads its script through this worker's event loop: the helpers are
   // waited for here, not while the kept pass holds the loop.
-  const helpers = await startHelpers(threadsFor(options, quiet, width, height) - 1);
+  const helpers = await startHelpers(wanted);
   try {
-    made = soup.reconstructUnfused(one, two, json, progress);
+    const flow = given ?? (helpers.length > 0 ? await directionsApart(pixels, json, helpers, progress) : null);
+    directionsDone = flow !== null;
+    firstFlow = flow;
+    const [a, b] = pixels === null ? [one, two] : pixels.map(builderOf);
+    made = soup.reconstructUnfused(a, b, json, progress, flow?.forward, flow?.backward);
     await fuseMembers(made, json, helpers, progress);
   } catch (e) {
     if (!describe(e).fatal) {
@@ -170,12 +212,49 @@ async function run(id, { frames, options, quiet = false }) {
     pictures,
     legend: JSON.parse(current.depthLegend(64)),
     report: JSON.parse(current.report()),
-    // `helpers`: the helper workers that made members (www/pipeline.js's lastRun.worker).
-    timings: { pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length },
+    // `helpers`: the helper workers that made members (www/pipeline.js's lastRun.worker);
+    // `flowApart`: whether a helper computed one of the first flow's directions.
+    timings: {
+      pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length, flowApart: firstFlow !== null,
+    },
     memoryBytes: soup.memoryBytes(),
+    // The first flow's directions when computed apart: the page gives them back to the run
+    // that computes this result again (www/pipeline.js), which then need not compute them.
+    flow: firstFlow,
   };
   const transfer = [...cloudTransfer(cloud), ...Object.values(pictures).map((p) => p.buffer)];
+  if (firstFlow !== null) {
+    transfer.push(firstFlow.forward.buffer, firstFlow.backward.buffer);
+  }
   return [{ result }, transfer];
+}
+
+/**
+ * The first flow's two directions (src/web/reconstruct.rs, `flowDirection`) at once: frame
+ * 2 → 1 in the first of `helpers`, 1 → 2 here, from RGBA `pixels` of both frames (the helper
+ * gets copies). Resolves to { forward, backward } (Float32Arrays), or null when the helper
+ * fails: it is then left out of the run (terminated), and the run computes both here.
+ */
+async function directionsApart(pixels, json, helpers, progress) {
+  const helper = helpers[0];
+  const copies = pixels.map(({ width, height, data }) => ({ width, height, data: data.slice() }));
+  const asked = new Promise((resolve) => {
+    helper.onmessage = ({ data }) => resolve(data.type === 'reply' ? data.flow : null);
+    helper.onmessageerror = () => resolve(null);
+    helper.onerror = (event) => {
+      event.preventDefault();
+      resolve(null);
+    };
+  });
+  helper.postMessage({ type: 'backward-flow', id: 0, frames: copies, options: json }, copies.map((c) => c.data.buffer));
+  const [a, b] = pixels.map(builderOf);
+  const forward = soup.flowDirection(a, b, json, false, (f) => progress?.('flow', 0.5 * f));
+  const backward = await asked;
+  if (backward === null) {
+    helpers.shift().terminate();
+    return null;
+  }
+  return { forward, backward };
 }
 
 /**
@@ -418,6 +497,11 @@ function handle(message) {
       return run(message.id, message);
     case 'members':
       return makeMembers(message.id, message);
+    case 'backward-flow': {
+      const [a, b] = message.frames.map(builderOf);
+      const flow = soup.flowDirection(a, b, message.options, true);
+      return [{ flow }, [flow.buffer]];
+    }
     case 'cloud': {
       const cloud = takeCloud(needResult().cloud(message.soup));
       return [{ cloud }, cloudTransfer(cloud)];

@@ -173,62 +173,107 @@ pub fn compute_flow(
     params: &FlowParams,
     progress: &mut dyn FnMut(f32),
 ) -> Result<FlowPair> {
-    frame1.check_same_size(frame2)?;
-    params.validate()?;
-    let (w, h) = frame1.size();
-    let Some((finest, coarsest)) = dis::levels(w, h, &params.dis) else {
-        return Err(Error::TooSmall {
-            width: w,
-            height: h,
-            min: dis::PATCH,
-        });
-    };
+    let (finest, coarsest) = check_inputs(frame1, frame2, params)?;
     progress(0.0);
     let pyramid1 = pyramid::build(&to_gray(frame1), finest, coarsest);
     let pyramid2 = pyramid::build(&to_gray(frame2), finest, coarsest);
-    // DIS on the finest level it computes, motion edges sharpened there (with the colour frame
-    // at that level, in that level's pixels), then brought to full resolution.
-    let (lw, lh) = pyramid::level_size(w, h, finest);
-    // Each direction is half the work: DIS its first `DIS_SHARE`, the sharpening the rest.
-    let mut run = |from: &[pyramid::Level], to: &[pyramid::Level], colour: &Frame, offset: f32| {
-        let (u, v) = dis::dis_flow(from, to, &params.dis, &mut |f| {
-            progress(offset + 0.5 * DIS_SHARE * f)
-        });
-        let data = u.iter().zip(&v).map(|(&u, &v)| [u, v]).collect();
-        let halved;
-        let colour = if finest == 0 {
-            colour
-        } else {
-            halved = edges::halve_frame(colour, finest);
-            &halved
-        };
-        let level =
-            edges::sharpen_motion_edges(&Grid::from_vec(lw, lh, data)?, colour, &params.edges)?;
-        progress(offset + 0.5);
-        if finest == 0 {
-            return Ok(level);
-        }
-        let factor = (1u32 << finest) as f32;
-        let (u, v): (Vec<f32>, Vec<f32>) = level.data().iter().map(|f| (f[0], f[1])).unzip();
-        let u = pyramid::upsample(&u, lw, lh, w, h, factor);
-        let v = pyramid::upsample(&v, lw, lh, w, h, factor);
-        let data = u.into_iter().zip(v).map(|(u, v)| [u, v]).collect();
-        Grid::from_vec(w, h, data)
-    };
-    let forward = run(&pyramid1, &pyramid2, frame1, 0.0)?;
-    let backward = run(&pyramid2, &pyramid1, frame2, 0.5)?;
+    // Each direction is half the work.
+    let forward = direction(&pyramid1, &pyramid2, frame1, finest, params, &mut |f| {
+        progress(0.5 * f)
+    })?;
+    let backward = direction(&pyramid2, &pyramid1, frame2, finest, params, &mut |f| {
+        progress(0.5 + 0.5 * f)
+    })?;
+    let pair = pair_from_directions(forward, backward, params)?;
+    progress(1.0);
+    Ok(pair)
+}
+
+/// One direction of [`compute_flow`]: the flow from frame `from` to frame `to` (the same bits as
+/// that direction of `compute_flow`, so the two directions can be computed apart, in two of the
+/// page's workers at once, and joined by [`pair_from_directions`]). Errors as `compute_flow`'s.
+pub fn compute_direction(
+    from: &Frame,
+    to: &Frame,
+    params: &FlowParams,
+    progress: &mut dyn FnMut(f32),
+) -> Result<FlowField> {
+    let (finest, coarsest) = check_inputs(from, to, params)?;
+    progress(0.0);
+    let pyramid_from = pyramid::build(&to_gray(from), finest, coarsest);
+    let pyramid_to = pyramid::build(&to_gray(to), finest, coarsest);
+    direction(&pyramid_from, &pyramid_to, from, finest, params, progress)
+}
+
+/// Both directions of a flow (as [`compute_direction`] makes them, `params` those they were
+/// made with) with the forward–backward mask: what [`compute_flow`] returns.
+/// Errors: [`Error::SizeMismatch`] when the fields differ in size.
+pub fn pair_from_directions(
+    forward: FlowField,
+    backward: FlowField,
+    params: &FlowParams,
+) -> Result<FlowPair> {
     let reliable = consistency::forward_backward_mask(
         &forward,
         &backward,
         params.fb_threshold,
         params.fb_relative,
     )?;
-    progress(1.0);
     Ok(FlowPair {
         forward,
         backward,
         reliable,
     })
+}
+
+/// The pyramid levels (finest, coarsest) DIS computes for two frames, once they are checked:
+/// same size, valid parameters, sides of at least a patch.
+fn check_inputs(frame1: &Frame, frame2: &Frame, params: &FlowParams) -> Result<(usize, usize)> {
+    frame1.check_same_size(frame2)?;
+    params.validate()?;
+    let (w, h) = frame1.size();
+    dis::levels(w, h, &params.dis).ok_or(Error::TooSmall {
+        width: w,
+        height: h,
+        min: dis::PATCH,
+    })
+}
+
+/// The flow from the frame of pyramid `from` (its colour frame `colour`) to that of `to` at full
+/// resolution: DIS on the pyramids' first level, `finest` (level 0: full resolution), motion
+/// edges sharpened there (with the colour frame at that level, in that level's pixels), then
+/// brought to full resolution.
+/// `progress` goes from 0 to 1: DIS its first [`DIS_SHARE`], the sharpening the rest.
+fn direction(
+    from: &[pyramid::Level],
+    to: &[pyramid::Level],
+    colour: &Frame,
+    finest: usize,
+    params: &FlowParams,
+    progress: &mut dyn FnMut(f32),
+) -> Result<FlowField> {
+    let (w, h) = colour.size();
+    let (lw, lh) = pyramid::level_size(w, h, finest);
+    let (u, v) = dis::dis_flow(from, to, &params.dis, &mut |f| progress(DIS_SHARE * f));
+    let data = u.iter().zip(&v).map(|(&u, &v)| [u, v]).collect();
+    let halved;
+    let colour = if finest == 0 {
+        colour
+    } else {
+        halved = edges::halve_frame(colour, finest);
+        &halved
+    };
+    let level = edges::sharpen_motion_edges(&Grid::from_vec(lw, lh, data)?, colour, &params.edges)?;
+    progress(1.0);
+    if finest == 0 {
+        return Ok(level);
+    }
+    let factor = (1u32 << finest) as f32;
+    let (u, v): (Vec<f32>, Vec<f32>) = level.data().iter().map(|f| (f[0], f[1])).unzip();
+    let u = pyramid::upsample(&u, lw, lh, w, h, factor);
+    let v = pyramid::upsample(&v, lw, lh, w, h, factor);
+    let data = u.into_iter().zip(v).map(|(u, v)| [u, v]).collect();
+    Grid::from_vec(w, h, data)
 }
 
 #[cfg(test)]

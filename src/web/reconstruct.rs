@@ -34,10 +34,10 @@ use crate::colormap::{depth_legend, depth_picture, inverse_depth_range};
 use crate::error::Error;
 use crate::export::{self, ExportFile};
 use crate::flow::colour::flow_picture_with_reliability;
-use crate::flow::{FlowParams, Preset};
+use crate::flow::{FlowParams, Preset, compute_direction, pair_from_directions};
 use crate::formats::ply::Encoding;
 use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
-use crate::input::{DEFAULT_MAX_SIDE, MIN_SIDE, prepare_pair};
+use crate::input::{DEFAULT_MAX_SIDE, FramePair, MIN_SIDE, prepare_pair};
 use crate::output::{cloud_labels, confidence_picture, dense_depth, depth_at, point_clouds};
 use crate::pipeline::{FlowInput, Params, Reconstruction, Stage};
 use crate::superpixels::view::boundary_overlay;
@@ -230,7 +230,7 @@ pub fn reconstruct(
     options: &str,
     progress: Option<Function>,
 ) -> Result<PageReconstruction, JsValue> {
-    let mut result = reconstruct_unfused(frame1, frame2, options, progress.clone())?;
+    let mut result = reconstruct_unfused(frame1, frame2, options, progress.clone(), None, None)?;
     crate::pipeline::fuse(&mut result.rec, &mut progress_callback(progress));
     result.finish();
     Ok(result)
@@ -239,16 +239,99 @@ pub fn reconstruct(
 /// [`reconstruct`] without the fusion: the result is not finished until the members' votes
 /// are given to it and it is fused ([`super::members`]: `memberInputs`, `addVote`,
 /// `addFailure`, `fuse`); until then its clouds, pictures and files are those before the
-/// fusion.
+/// fusion. `forward` and `backward`, when given, are the first flow's two directions
+/// ([`flow_direction`] of the same frames and options, as `u, v` pairs row by row; both or
+/// neither): the flow stage then only joins them.
 #[wasm_bindgen(js_name = reconstructUnfused)]
 pub fn reconstruct_unfused(
     frame1: FrameBuilder,
     frame2: FrameBuilder,
     options: &str,
     progress: Option<Function>,
+    forward: Option<Vec<f32>>,
+    backward: Option<Vec<f32>>,
 ) -> Result<PageReconstruction, JsValue> {
-    let options: RunOptions = serde_json::from_str(options)
-        .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))?;
+    let options = parse_options(options)?;
+    let (pair, photo_size) = prepared_pair(frame1, frame2, &options)?;
+    let params = FlowParams::preset(options.flow_preset);
+    let flow = match (forward, backward) {
+        (None, None) => FlowInput::Compute(params),
+        (Some(forward), Some(backward)) => {
+            let (w, h) = pair.frame1.size();
+            let field = |data: Vec<f32>| {
+                if data.len() != 2 * w * h {
+                    return Err(js_error(Error::InvalidParameter(format!(
+                        "a flow direction of {} numbers for {w}×{h} frames",
+                        data.len()
+                    ))));
+                }
+                let vectors = data.chunks_exact(2).map(|v| [v[0], v[1]]).collect();
+                crate::Grid::from_vec(w, h, vectors).map_err(js_error)
+            };
+            let joined = pair_from_directions(field(forward)?, field(backward)?, &params);
+            FlowInput::Computed(params, Box::new(joined.map_err(js_error)?))
+        }
+        _ => {
+            return Err(js_error(Error::InvalidParameter(
+                "give both flow directions or neither".into(),
+            )));
+        }
+    };
+    let mut report = progress_callback(progress);
+    let rec = crate::pipeline::reconstruct_unfused(&pair, flow, &options.params, &mut report)
+        .map_err(js_error)?;
+    Ok(PageReconstruction {
+        rec,
+        ground_truth: GroundTruthScores::default(),
+        photo_size,
+        votes: Some(Vec::new()),
+    })
+}
+
+/// One direction of the first flow [`reconstruct_unfused`] computes for these frames and
+/// options (frame 1 → 2, or 2 → 1 when `backward`), as `u, v` pairs row by row at the working
+/// size: the page's worker computes one while a helper computes the other, and gives both to
+/// `reconstructUnfused` (the same result bit for bit). `progress(fraction)`, when given, is
+/// called as the work goes. Throws as `reconstructUnfused` does.
+#[wasm_bindgen(js_name = flowDirection)]
+pub fn flow_direction(
+    frame1: FrameBuilder,
+    frame2: FrameBuilder,
+    options: &str,
+    backward: bool,
+    progress: Option<Function>,
+) -> Result<Vec<f32>, JsValue> {
+    let options = parse_options(options)?;
+    let (pair, _) = prepared_pair(frame1, frame2, &options)?;
+    let (from, to) = if backward {
+        (&pair.frame2, &pair.frame1)
+    } else {
+        (&pair.frame1, &pair.frame2)
+    };
+    let mut report = |fraction: f32| {
+        if let Some(callback) = &progress {
+            // A throwing callback must not abort the computation.
+            let _ = callback.call1(&JsValue::NULL, &JsValue::from_f64(fraction.into()));
+        }
+    };
+    let params = FlowParams::preset(options.flow_preset);
+    let flow = compute_direction(from, to, &params, &mut report).map_err(js_error)?;
+    Ok(flow.data().iter().flat_map(|&[u, v]| [u, v]).collect())
+}
+
+/// The run's options from their JSON ([`RunOptions`]).
+fn parse_options(options: &str) -> Result<RunOptions, JsValue> {
+    serde_json::from_str(options)
+        .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))
+}
+
+/// The frames as the pipeline takes them (at the working size, the camera resolved) and the
+/// photos' own size where the page decoded them smaller.
+fn prepared_pair(
+    frame1: FrameBuilder,
+    frame2: FrameBuilder,
+    options: &RunOptions,
+) -> Result<(FramePair, Option<(usize, usize)>), JsValue> {
     let frame1 = frame1.finish().map_err(js_error)?;
     let mut frame2 = frame2.finish().map_err(js_error)?;
     let mut intrinsics = options.intrinsics;
@@ -276,11 +359,11 @@ pub fn reconstruct_unfused(
     let mut pair = prepare_pair(
         LoadedImage {
             frame: frame1,
-            exif: options.exif1,
+            exif: options.exif1.clone(),
         },
         LoadedImage {
             frame: frame2,
-            exif: options.exif2,
+            exif: options.exif2.clone(),
         },
         intrinsics,
         options.max_side,
@@ -294,16 +377,7 @@ pub fn reconstruct_unfused(
             "downscaled from {w}×{h} to {ww}×{wh} (as the page decoded the photos)"
         ));
     }
-    let mut report = progress_callback(progress);
-    let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
-    let rec = crate::pipeline::reconstruct_unfused(&pair, flow, &options.params, &mut report)
-        .map_err(js_error)?;
-    Ok(PageReconstruction {
-        rec,
-        ground_truth: GroundTruthScores::default(),
-        photo_size,
-        votes: Some(Vec::new()),
-    })
+    Ok((pair, photo_size))
 }
 
 /// The pipeline's progress callback calling `progress(stage, fraction)` when given.

@@ -210,21 +210,23 @@ test('cancel stops a run at once and the next run works', async () => {
 
 test('the fusion\'s members made in helper workers, and the build without SIMD, give the result of the worker alone', async () => {
   // www/worker.js makes the members in helper workers (one per core, up to four workers in
-  // all); `?threads=1` makes them all in the pipeline's worker. It loads the lean build with
+  // all), and the first helper computes the first flow's backward direction meanwhile (given
+  // back to the run that computes the result again for the downloads); `?threads=1` makes
+  // everything in the pipeline's worker. It loads the lean build with
   // wasm SIMD where the browser has it (Chromium does), and `?worker=scalar` the one without.
   // The files are the same, byte for byte.
   const runWith = async (query) => {
     const { page, errors } = await openPage(session.browser, session.server.url, query);
     await page.setInputFiles('#file-input', SAMPLE);
     assert.equal(await waitForRunEnd(page), 'done', await alertText(page));
-    const { helpers } = await page.evaluate(() => window.soupPage.lastRun.worker);
+    const { helpers, flowApart } = await page.evaluate(() => window.soupPage.lastRun.worker);
     const cores = await page.evaluate(() => navigator.hardwareConcurrency);
     const build = await page.evaluate(() => document.body.dataset.workerBuild);
     const depth = await download(page, 'depth.pfm');
     const report = JSON.parse((await download(page, 'report.json')).toString('utf8'));
     assert.deepEqual(errors, []);
     await page.context().close();
-    return { helpers, cores, build, depth, report };
+    return { helpers, flowApart, cores, build, depth, report };
   };
   const alone = await runWith('?threads=1');
   const helped = await runWith('?threads=2');
@@ -232,6 +234,7 @@ test('the fusion\'s members made in helper workers, and the build without SIMD, 
   assert.equal(alone.helpers, 0);
   assert.equal(helped.helpers, helped.cores >= 2 ? 1 : 0);
   assert.equal(scalar.helpers, helped.helpers);
+  assert.deepEqual([alone.flowApart, helped.flowApart], [false, helped.helpers > 0]);
   assert.deepEqual([alone.build, helped.build, scalar.build], ['soup_worker_simd', 'soup_worker_simd', 'soup_worker']);
   for (const other of [helped, scalar]) {
     assert.ok(alone.depth.equals(other.depth), `the depth of ${other.build} with ${other.helpers} helpers differs`);

@@ -141,7 +141,7 @@ export async function run({ resizeSecond = false, restored = false } = {}) {
       kept.forEach((frame) => frame.close());
       return;
     }
-    page.pipeline.release({ frames: kept, options });
+    page.pipeline.release({ frames: kept, options, flow: result.flow });
     await showResult(result);
     if (!current()) {
       return; // another action (new photos, start over) came while the result was shown
