@@ -392,6 +392,7 @@ fn flow_directions_come_both_or_neither_and_fit_the_frames() {
             None,
             forward,
             backward,
+            None,
         )
     };
     let (name, message) =
@@ -430,6 +431,7 @@ fn members_made_in_other_workers_fuse_to_the_same_result() {
         None,
         Some(forward),
         Some(backward),
+        Some(1000.0),
     )
     .unwrap();
     let inputs = parts.member_inputs();
@@ -488,12 +490,23 @@ fn members_made_in_other_workers_fuse_to_the_same_result() {
             "{file}"
         );
     }
-    let report = |r: &PageReconstruction| {
-        let mut json: serde_json::Value = serde_json::from_str(&r.report().unwrap()).unwrap();
+    let report = |r: &PageReconstruction| -> serde_json::Value {
+        serde_json::from_str(&r.report().unwrap()).unwrap()
+    };
+    let without_times = |r: &PageReconstruction| {
+        let mut json = report(r);
         json.as_object_mut().unwrap().remove("timings_ms");
         json
     };
-    assert_eq!(report(&parts), report(&whole));
+    assert_eq!(without_times(&parts), without_times(&whole));
+    // The flow's time counts the directions' 1000 ms.
+    let flow_ms = report(&parts)["timings_ms"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t[0] == "flow")
+        .map(|t| t[1].as_f64().unwrap());
+    assert!(flow_ms.is_some_and(|ms| ms >= 1000.0), "{flow_ms:?}");
     // Finished: the fusion's methods throw.
     for thrown in [parts.add_failure("late"), parts.fuse(0.0)] {
         assert_eq!(

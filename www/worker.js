@@ -184,7 +184,7 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
     directionsDone = flow !== null;
     firstFlow = flow;
     const [a, b] = pixels === null ? [one, two] : pixels.map(builderOf);
-    made = soup.reconstructUnfused(a, b, json, progress, flow?.forward, flow?.backward);
+    made = soup.reconstructUnfused(a, b, json, progress, flow?.forward, flow?.backward, flow?.ms);
     await fuseMembers(made, json, helpers, progress);
   } catch (e) {
     if (!describe(e).fatal) {
@@ -232,10 +232,12 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
 /**
  * The first flow's two directions (src/web/reconstruct.rs, `flowDirection`) at once: frame
  * 2 → 1 in the first of `helpers`, 1 → 2 here, from RGBA `pixels` of both frames (the helper
- * gets copies). Resolves to { forward, backward } (Float32Arrays), or null when the helper
- * fails: it is then left out of the run (terminated), and the run computes both here.
+ * gets copies). Resolves to { forward, backward } (Float32Arrays) and `ms`, the time they took,
+ * or null when the helper fails: it is then left out of the run (terminated), and the run
+ * computes both here.
  */
 async function directionsApart(pixels, json, helpers, progress) {
+  const start = performance.now();
   const helper = helpers[0];
   const copies = pixels.map(({ width, height, data }) => ({ width, height, data: data.slice() }));
   const asked = new Promise((resolve) => {
@@ -254,7 +256,7 @@ async function directionsApart(pixels, json, helpers, progress) {
     helpers.shift().terminate();
     return null;
   }
-  return { forward, backward };
+  return { forward, backward, ms: performance.now() - start };
 }
 
 /**

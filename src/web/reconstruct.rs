@@ -230,7 +230,8 @@ pub fn reconstruct(
     options: &str,
     progress: Option<Function>,
 ) -> Result<PageReconstruction, JsValue> {
-    let mut result = reconstruct_unfused(frame1, frame2, options, progress.clone(), None, None)?;
+    let mut result =
+        reconstruct_unfused(frame1, frame2, options, progress.clone(), None, None, None)?;
     crate::pipeline::fuse(&mut result.rec, &mut progress_callback(progress));
     result.finish();
     Ok(result)
@@ -241,7 +242,8 @@ pub fn reconstruct(
 /// `addFailure`, `fuse`); until then its clouds, pictures and files are those before the
 /// fusion. `forward` and `backward`, when given, are the first flow's two directions
 /// ([`flow_direction`] of the same frames and options, as `u, v` pairs row by row; both or
-/// neither): the flow stage then only joins them.
+/// neither): the flow stage then only joins them, and the report's flow time counts
+/// `directions_ms`, the milliseconds they took.
 #[wasm_bindgen(js_name = reconstructUnfused)]
 pub fn reconstruct_unfused(
     frame1: FrameBuilder,
@@ -250,6 +252,7 @@ pub fn reconstruct_unfused(
     progress: Option<Function>,
     forward: Option<Vec<f32>>,
     backward: Option<Vec<f32>>,
+    directions_ms: Option<f64>,
 ) -> Result<PageReconstruction, JsValue> {
     let options = parse_options(options)?;
     let (pair, photo_size) = prepared_pair(frame1, frame2, &options)?;
@@ -277,9 +280,18 @@ pub fn reconstruct_unfused(
             )));
         }
     };
+    let given = matches!(flow, FlowInput::Computed(..));
     let mut report = progress_callback(progress);
-    let rec = crate::pipeline::reconstruct_unfused(&pair, flow, &options.params, &mut report)
+    let mut rec = crate::pipeline::reconstruct_unfused(&pair, flow, &options.params, &mut report)
         .map_err(js_error)?;
+    let timings = &mut rec.report.timings_ms;
+    if let (true, Some(ms), Some((_, flow_ms))) = (
+        given,
+        directions_ms,
+        timings.iter_mut().find(|(stage, _)| *stage == Stage::Flow),
+    ) {
+        *flow_ms += ms;
+    }
     Ok(PageReconstruction {
         rec,
         ground_truth: GroundTruthScores::default(),
