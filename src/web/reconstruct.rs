@@ -75,10 +75,11 @@ pub struct RunOptions {
 /// 58) in two thirds of the flow's time. Against `medium` (half resolution) fine halves the depth
 /// error on static-room, the street, the creature and the table, and only with it does
 /// static-room meet its 0.015 target in the page's settings. Its price (`node
-/// benches/page.mjs`, stop 59, runs alternated with medium): a 12 MP photo pair's peak tab
-/// memory 373–374 → 390–397 MiB (budget 400; 394–403 before the refinement's arrays were
-/// allocated a row at a time) and its end to end time 4.7–5.2 → 5.7 s; a 1024 × 436 pair 3.1 →
-/// 3.6 s.
+/// benches/page.mjs`, stop 59, against medium in alternated runs) is small since the flow's two
+/// directions are computed at once in two workers (`www/worker.js`) and the recompute of a shown
+/// result is handed its flow (`www/pipeline.js`): a 12 MP photo pair's peak tab memory 373–374
+/// → 385–387 MiB (budget 400) and its end to end time 4.7–5.2 → 5.0–5.1 s; a 1024 × 436 pair
+/// 3.1 s either way.
 /// A run whose first pass pins too few scales, leaves the camera's motion ambiguous or finds no
 /// ground makes a second pass with `high` ([`Params::min_pinned_share`],
 /// [`Params::finer_without_ground`]): an answer worse than a constant depth costs more than the
