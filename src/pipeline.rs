@@ -142,6 +142,44 @@ impl Params {
         self.refine.particles = self.ensemble.member_particles;
         self
     }
+
+    /// Fails with [`Error::InvalidParameter`] for the settings [`reconstruct_unfused`] checks
+    /// before it starts: the shares, the fusion's members and steps, the expansion factors
+    /// (each stage checks its own parameters as it runs).
+    pub fn validate(&self) -> Result<()> {
+        for (name, share) in [
+            ("min_reliable_flow", self.min_reliable_flow),
+            ("min_pinned_share", self.min_pinned_share),
+            ("ensemble.guess_weight", self.ensemble.guess_weight),
+        ] {
+            if !(0.0..=1.0).contains(&share) {
+                return Err(Error::InvalidParameter(format!(
+                    "{name} {share} must be a share in [0, 1]"
+                )));
+            }
+        }
+        let ensemble = &self.ensemble;
+        if ensemble.members > MAX_MEMBERS
+            || (ensemble.members > 1
+                && !(ensemble.count_step > 0.0
+                    && ensemble.count_step * (ensemble.members / 2) as f64 <= 0.5))
+        {
+            return Err(Error::InvalidParameter(format!(
+                "ensemble: {} members with count_step {}: at most {MAX_MEMBERS} members, and with more \
+             than one a step above 0 that keeps their superpixel counts within half and one and \
+             a half times the count (step × (members / 2) ≤ 0.5)",
+                ensemble.members, ensemble.count_step
+            )));
+        }
+        let factors = self.refine.expansion_factors;
+        if !factors.iter().all(|f| *f > 0.0 && *f < 1.0) {
+            return Err(Error::InvalidParameter(format!(
+                "refine.expansion_factors {factors:?}: each must lie strictly between 0 and 1 (it is \
+             tried as a shrink f and a growth 1/f)"
+            )));
+        }
+        Ok(())
+    }
 }
 
 /// Where the flow 1→2 comes from. Every source yields the same two things for the later
@@ -154,11 +192,16 @@ pub enum FlowInput {
     /// Computed from the two frames by [`compute_flow`] (DIS with variational refinement, both
     /// ways); vectors failing the forward–backward check are not trusted.
     Compute(FlowParams),
-    /// `Compute` with these parameters, whose first flow was computed already, at the working
-    /// resolution: by [`compute_flow`], or by its two directions apart
-    /// ([`crate::flow::compute_direction`]; the page computes one in a helper worker). Later
-    /// passes compute their finer flow as `Compute` does.
-    Computed(FlowParams, Box<FlowPair>),
+    /// `Compute` with these parameters, whose first flow's two directions were computed already
+    /// at the working resolution ([`crate::flow::compute_direction`]; the page computes one in
+    /// a helper worker): the forward–backward check joins them
+    /// ([`crate::flow::pair_from_directions`]) to what `compute_flow` gives. Later passes
+    /// compute their finer flow as `Compute` does.
+    Computed {
+        params: FlowParams,
+        forward: FlowField,
+        backward: FlowField,
+    },
 }
 
 /// Milliseconds per stage and the solve's numbers, for `report.json` and the page.
@@ -323,37 +366,7 @@ pub fn reconstruct_unfused(
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
-    for (name, share) in [
-        ("min_reliable_flow", params.min_reliable_flow),
-        ("min_pinned_share", params.min_pinned_share),
-        ("ensemble.guess_weight", params.ensemble.guess_weight),
-    ] {
-        if !(0.0..=1.0).contains(&share) {
-            return Err(Error::InvalidParameter(format!(
-                "{name} {share} must be a share in [0, 1]"
-            )));
-        }
-    }
-    let ensemble = &params.ensemble;
-    if ensemble.members > MAX_MEMBERS
-        || (ensemble.members > 1
-            && !(ensemble.count_step > 0.0
-                && ensemble.count_step * (ensemble.members / 2) as f64 <= 0.5))
-    {
-        return Err(Error::InvalidParameter(format!(
-            "ensemble: {} members with count_step {}: at most {MAX_MEMBERS} members, and with more \
-             than one a step above 0 that keeps their superpixel counts within half and one and \
-             a half times the count (step × (members / 2) ≤ 0.5)",
-            ensemble.members, ensemble.count_step
-        )));
-    }
-    let factors = params.refine.expansion_factors;
-    if !factors.iter().all(|f| *f > 0.0 && *f < 1.0) {
-        return Err(Error::InvalidParameter(format!(
-            "refine.expansion_factors {factors:?}: each must lie strictly between 0 and 1 (it is \
-             tried as a shrink f and a growth 1/f)"
-        )));
-    }
+    params.validate()?;
     match flow {
         FlowInput::Given(given) => {
             let mut rec = reconstruct_from(pair, FlowInput::Given(given), params, None, progress)?;
@@ -362,9 +375,11 @@ pub fn reconstruct_unfused(
             Ok(rec)
         }
         FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, None, params, progress),
-        FlowInput::Computed(first, flow) => {
-            reconstruct_until_pinned(pair, first, Some(flow), params, progress)
-        }
+        FlowInput::Computed {
+            params: first,
+            forward,
+            backward,
+        } => reconstruct_until_pinned(pair, first, Some((forward, backward)), params, progress),
     }
 }
 
@@ -445,8 +460,8 @@ impl Pass {
     }
 }
 
-/// Passes of [`reconstruct_from`] from the flow of `first` (`first_flow` when it was computed
-/// already), then of the next finer preset while
+/// Passes of [`reconstruct_from`] from the flow of `first` (its directions `first_flow` when
+/// they were computed already), then of the next finer preset while
 /// the last pass pins less than [`Params::min_pinned_share`] (flow too coarse to show where
 /// movers meet the world leaves their scales to guesses), its camera motion is ambiguous
 /// (flow too coarse to tell the camera's motion from a compromise with the movers) or it found
@@ -465,12 +480,16 @@ impl Pass {
 fn reconstruct_until_pinned(
     pair: &FramePair,
     first: FlowParams,
-    first_flow: Option<Box<FlowPair>>,
+    first_flow: Option<(FlowField, FlowField)>,
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
     let input = match first_flow {
-        Some(flow) => FlowInput::Computed(first, flow),
+        Some((forward, backward)) => FlowInput::Computed {
+            params: first,
+            forward,
+            backward,
+        },
         None => FlowInput::Compute(first),
     };
     let first_pass = reconstruct_from(pair, input, params, None, progress)?;
@@ -656,7 +675,7 @@ impl SetAside {
             forward: flow,
             reliable,
             ..
-        } = compute_flow(&pair.frame1, &pair.frame2, &used, &mut |f| {
+        } = flow_both_ways(pair, &used, &mut |f| {
             progress(Stage::Outputs, RESTORED_FLOW_SHARE * f)
         })?;
         clock.lap(Stage::Flow);
@@ -808,11 +827,15 @@ fn reconstruct_from(
             )?;
             (computed.forward, computed.reliable, Some(used))
         }
-        FlowInput::Computed(flow_params, first) => {
+        FlowInput::Computed {
+            params: flow_params,
+            forward,
+            backward,
+        } => {
             let (computed, used) = trusted_flow(
                 pair,
                 flow_params,
-                Some(*first),
+                Some((forward, backward)),
                 params.min_reliable_flow,
                 &mut notes,
                 &mut |f| progress(Stage::Flow, f),
@@ -1135,6 +1158,37 @@ fn vote_of(
     Vote { depth, pinned }
 }
 
+/// Flow both ways between the pair's frames with `params`, as [`compute_flow`] gives it (the
+/// same bits): natively, on a machine with more than one core, the backward direction on a
+/// thread of its own while the calling thread computes the forward one (each is half the flow's
+/// time); in wasm one after the other (the page computes them in two workers instead,
+/// [`FlowInput::Computed`]). `progress` gets the share done in [0, 1] (with two threads, that of
+/// the forward direction). Errors as `compute_flow`'s.
+fn flow_both_ways(
+    pair: &FramePair,
+    params: &FlowParams,
+    progress: &mut dyn FnMut(f32),
+) -> Result<FlowPair> {
+    let (one, two) = (&pair.frame1, &pair.frame2);
+    #[cfg(not(target_arch = "wasm32"))]
+    if std::thread::available_parallelism().is_ok_and(|n| n.get() > 1) {
+        use crate::flow::{compute_direction, pair_from_directions};
+        let (forward, backward) = std::thread::scope(|scope| {
+            let backward = scope.spawn(|| compute_direction(two, one, params, &mut |_| {}));
+            let forward = compute_direction(one, two, params, progress);
+            // A panic (a bug, never bad input) goes on from here, as it would without a thread.
+            let backward = backward
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p));
+            (forward, backward)
+        });
+        let flow = pair_from_directions(forward?, backward?, params)?;
+        progress(1.0);
+        return Ok(flow);
+    }
+    compute_flow(one, two, params, progress)
+}
+
 /// At most this many members are made at once natively: each holds a whole reconstruction's
 /// segmentation, soups and refinement problem, so the memory grows with it. 4: the default
 /// number of members besides the kept reconstruction.
@@ -1225,7 +1279,8 @@ where
     slots.into_iter().flatten().collect()
 }
 
-/// Flow by [`compute_flow`] with `params` (`first` when it was computed already), computed again with the next finer preset
+/// Flow by [`compute_flow`] with `params` ([`flow_both_ways`]; from the directions `first`
+/// when they were computed already), computed again with the next finer preset
 /// ([`FlowParams::finer`]) while less than `min_reliable` of the pixels passes the
 /// forward–backward check (large motions that the coarser preset tracks badly); the pass with
 /// the most trusted pixels is kept, with the parameters it used. Each new pass adds a note, and
@@ -1238,24 +1293,27 @@ where
 fn trusted_flow(
     pair: &FramePair,
     params: FlowParams,
-    first: Option<FlowPair>,
+    first: Option<(FlowField, FlowField)>,
     min_reliable: f64,
     notes: &mut Vec<String>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<(FlowPair, FlowParams)> {
-    if let Some(given) = &first {
-        let size = pair.frame1.size();
-        for field in [&given.forward, &given.backward] {
-            if field.size() != size {
-                return Err(Error::SizeMismatch {
-                    w1: size.0,
-                    h1: size.1,
-                    w2: field.width(),
-                    h2: field.height(),
-                });
+    let first = match first {
+        Some((forward, backward)) => {
+            let (w, h) = pair.frame1.size();
+            if forward.size() != (w, h) {
+                return Err(Error::InvalidParameter(format!(
+                    "the given flow is {}×{}; the frames are {w}×{h}",
+                    forward.width(),
+                    forward.height()
+                )));
             }
+            Some(crate::flow::pair_from_directions(
+                forward, backward, &params,
+            )?)
         }
-    }
+        None => None,
+    };
     let mut start = 0.0f32;
     let mut run = |p: &FlowParams, given: Option<FlowPair>| -> Result<(f64, FlowPair)> {
         let cost = |p: &FlowParams| p.named_preset().map_or(1.0, Preset::relative_cost);
@@ -1264,9 +1322,7 @@ fn trusted_flow(
         let (from, span) = (start, share * (1.0 - start));
         let computed = match given {
             Some(computed) => computed,
-            None => compute_flow(&pair.frame1, &pair.frame2, p, &mut |f| {
-                progress(from + span * f)
-            })?,
+            None => flow_both_ways(pair, p, &mut |f| progress(from + span * f))?,
         };
         start += span;
         Ok((trusted_share(&computed.reliable), computed))

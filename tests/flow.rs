@@ -370,11 +370,21 @@ fn directions_computed_apart_and_joined_are_the_flow_bit_for_bit() {
     for preset in [Preset::Medium, Preset::Fine] {
         let params = FlowParams::preset(preset);
         let (one, two) = (&scene.frame1, &scene.frame2);
-        let whole = compute_flow(one, two, &params, &mut |_| {}).unwrap();
-        let mut seen = Vec::new();
+        let mut whole_seen = Vec::new();
+        let whole = compute_flow(one, two, &params, &mut |f| whole_seen.push(f)).unwrap();
+        let (mut seen, mut back_seen) = (Vec::new(), Vec::new());
         let forward = compute_direction(one, two, &params, &mut |f| seen.push(f)).unwrap();
-        let backward = compute_direction(two, one, &params, &mut |_| {}).unwrap();
+        let backward = compute_direction(two, one, &params, &mut |f| back_seen.push(f)).unwrap();
         assert_eq!((seen.first(), seen.last()), (Some(&0.0), Some(&1.0)));
+        // compute_flow reports 0, each direction's progress after its start on its half, then 1.
+        let halves = seen[1..].iter().map(|f| 0.5 * f);
+        let expected: Vec<f32> = [0.0]
+            .into_iter()
+            .chain(halves)
+            .chain(back_seen[1..].iter().map(|f| 0.5 + 0.5 * f))
+            .chain([1.0])
+            .collect();
+        assert_eq!(whole_seen, expected, "{}", preset.name());
         let joined = pair_from_directions(forward, backward, &params).unwrap();
         assert_eq!(
             bits(&joined.forward),

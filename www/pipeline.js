@@ -41,7 +41,7 @@ export class Pipeline {
     this.pending = new Map();
     this.nextId = 1;
     this.ready = null;
-    /** After `release`: the released run's { frames, options }, until they are sent again. */
+    /** After `release`: the released run's { frames, options, flow }, until they are sent again. */
     this.inputs = null;
     /** The run computing the released result again, while it runs. */
     this.recomputing = null;

@@ -30,8 +30,9 @@
 //       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below);
 //       `quiet: true` (the page computing a result it already has again, www/pipeline.js):
 //       no progress and no result in the reply, the reconstruction is only kept; `flow`
-//       (optional): { forward, backward }, the first flow's directions as an earlier run of
-//       the same frames and options gave them in its result (`result.flow`)
+//       (optional): { forward, backward, ms }, the first flow's directions and the time they
+//       took, as an earlier run of the same frames and options gave them in its result
+//       (`result.flow`; the report's flow time then counts that time and this run's own)
 //   { type: 'cloud', soup: 'organised' | 'scaled' | 'unorganised' } → { cloud }
 //   { type: 'export', name }                                → { bytes: ArrayBuffer, mediaType }
 //   { type: 'score-depth', name, bytes, pngScale }          → { score, picture: RGBA at the
@@ -90,7 +91,7 @@ const MAX_THREADS = 4;
 /** The last reconstruction, kept in wasm memory for clouds and exports on request. */
 let current = null;
 
-/** Bytes of RGBA read from a canvas at a time (a few rows; a photo is never copied whole). */
+/** Bytes of RGBA read from a canvas at a time by readFrame (a few rows, not the whole frame). */
 const STRIP_BYTES = 4 * 2 ** 20;
 
 /** The RGBA pixels of an ImageBitmap (closed here): { width, height, data }. */
@@ -155,18 +156,16 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   current = null;
   const [width, height] = [frames[0].width, frames[0].height];
   const wanted = threadsFor(options, quiet, width, height) - 1;
-  // With helpers, the first flow's two directions are computed at once (directionsApart),
-  // from pixels held here; else the frames go to wasm in strips, never whole in JavaScript.
-  const pixels = wanted > 0 ? frames.map(pixelsOf) : null;
+  // With helpers, the first flow's two directions are computed at once (directionsApart), from
+  // the frames' pixels read whole here (at the working size) until they are in wasm; else the
+  // frames go to wasm in strips, never whole in JavaScript.
+  let pixels = wanted > 0 ? frames.map(pixelsOf) : null;
   const [one, two] = pixels === null ? frames.map(readFrame) : [null, null];
   const pixelsMs = performance.now() - clock;
   let last = { stage: '', fraction: -1 };
-  let directionsDone = false;
   const progress = quiet ? undefined : (stage, fraction) => {
-    if (directionsDone && stage === 'flow' && last.stage === 'flow' && fraction < last.fraction) {
-      return; // the flow joined after its directions apart: no step back
-    }
-    // At most ~50 messages per stage.
+    // At most ~50 messages per stage, never a step back within one (the flow joined after its
+    // directions apart reports its start again).
     if (stage !== last.stage || fraction - last.fraction >= 0.02 || fraction === 1) {
       last = { stage, fraction };
       postMessage({ type: 'progress', id, stage, fraction });
@@ -181,9 +180,9 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   const helpers = await startHelpers(wanted);
   try {
     const flow = given ?? (helpers.length > 0 ? await directionsApart(pixels, json, helpers, progress) : null);
-    directionsDone = flow !== null;
     firstFlow = flow;
     const [a, b] = pixels === null ? [one, two] : pixels.map(builderOf);
+    pixels = null; // in wasm now
     made = soup.reconstructUnfused(a, b, json, progress, flow?.forward, flow?.backward, flow?.ms);
     await fuseMembers(made, json, helpers, progress);
   } catch (e) {
@@ -215,12 +214,12 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
     // `helpers`: the helper workers that made members (www/pipeline.js's lastRun.worker);
     // `flowApart`: whether a helper computed one of the first flow's directions.
     timings: {
-      pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length, flowApart: firstFlow !== null,
+      pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length, flowApart: firstFlow?.apart === true,
     },
     memoryBytes: soup.memoryBytes(),
     // The first flow's directions when computed apart: the page gives them back to the run
     // that computes this result again (www/pipeline.js), which then need not compute them.
-    flow: firstFlow,
+    flow: firstFlow === null ? null : { forward: firstFlow.forward, backward: firstFlow.backward, ms: firstFlow.ms },
   };
   const transfer = [...cloudTransfer(cloud), ...Object.values(pictures).map((p) => p.buffer)];
   if (firstFlow !== null) {
@@ -232,9 +231,9 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
 /**
  * The first flow's two directions (src/web/reconstruct.rs, `flowDirection`) at once: frame
  * 2 → 1 in the first of `helpers`, 1 → 2 here, from RGBA `pixels` of both frames (the helper
- * gets copies). Resolves to { forward, backward } (Float32Arrays) and `ms`, the time they took,
- * or null when the helper fails: it is then left out of the run (terminated), and the run
- * computes both here.
+ * gets copies). Resolves to { forward, backward } (Float32Arrays), `ms`, the time they took,
+ * and `apart`, whether the helper computed one: a helper that fails is left out of the run
+ * (terminated), and its direction is computed here after the other.
  */
 async function directionsApart(pixels, json, helpers, progress) {
   const start = performance.now();
@@ -251,12 +250,14 @@ async function directionsApart(pixels, json, helpers, progress) {
   helper.postMessage({ type: 'backward-flow', id: 0, frames: copies, options: json }, copies.map((c) => c.data.buffer));
   const [a, b] = pixels.map(builderOf);
   const forward = soup.flowDirection(a, b, json, false, (f) => progress?.('flow', 0.5 * f));
-  const backward = await asked;
-  if (backward === null) {
-    helpers.shift().terminate();
-    return null;
+  let backward = await asked;
+  const apart = backward !== null;
+  if (!apart) {
+    helpers.shift().terminate(); // its members are made by the others
+    const [c, d] = pixels.map(builderOf);
+    backward = soup.flowDirection(c, d, json, true, (f) => progress?.('flow', 0.5 + 0.5 * f));
   }
-  return { forward, backward, ms: performance.now() - start };
+  return { forward, backward, ms: performance.now() - start, apart };
 }
 
 /**
@@ -288,7 +289,11 @@ function threadsFor(options, quiet, width, height) {
 /**
  * The tab memory one helper takes during a run: HELPER_MIB for the worker and its instance, and
  * HELPER_BYTES_PER_PIXEL per pixel of the working size for a member and its copy of the inputs
- * (sampled during runs: 47 MiB a helper at 1024 × 768, 30 MiB at 1024 × 436).
+ * (sampled during runs: 47 MiB a helper at 1024 × 768, 30 MiB at 1024 × 436). The first helper
+ * computes a flow direction before its members, which grows its wasm memory by the flow's
+ * working memory (at 1024 × 768 with preset fine both directions hold 58 MiB at their peak);
+ * with it the tab stayed at 346–350 MiB during a 12 MP run, below the peak after the run
+ * (docs/RESULTS.md, stop 59).
  */
 const HELPER_MIB = 8;
 const HELPER_BYTES_PER_PIXEL = 50;

@@ -207,12 +207,23 @@ pub fn compute_direction(
 
 /// Both directions of a flow (as [`compute_direction`] makes them, `params` those they were
 /// made with) with the forward–backward mask: what [`compute_flow`] returns.
-/// Errors: [`Error::SizeMismatch`] when the fields differ in size.
+/// Errors: [`Error::InvalidParameter`] when the fields differ in size or for invalid
+/// parameters.
 pub fn pair_from_directions(
     forward: FlowField,
     backward: FlowField,
     params: &FlowParams,
 ) -> Result<FlowPair> {
+    params.validate()?;
+    if forward.size() != backward.size() {
+        return Err(Error::InvalidParameter(format!(
+            "the flow's directions differ in size: {}×{} forward, {}×{} backward",
+            forward.width(),
+            forward.height(),
+            backward.width(),
+            backward.height()
+        )));
+    }
     let reliable = consistency::forward_backward_mask(
         &forward,
         &backward,

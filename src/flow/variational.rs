@@ -21,8 +21,9 @@
 //! derivatives (OpenCV's unnormalised [−1, 0, 1] kernels make them twice as large, which halves
 //! every increment). The linear system's arrays are padded by one pixel on every side (rows of
 //! w + 2, each row an allocation of its own): border pixels hold zero increments and zero
-//! smoothness weights, so the inner loops need no bounds logic. The equations and the derivatives they are made from are made a
-//! row at a time from the few rows around it, as each fixed-point iteration needs them.
+//! smoothness weights, so the inner loops need no bounds logic. The equations and the
+//! derivatives they are made from are made a row at a time from the few rows around it, as each
+//! fixed-point iteration needs them.
 
 use super::pyramid::{Level, sample_clamped};
 use crate::error::{Error, Result};
@@ -345,7 +346,7 @@ fn base_row(flow: &PaddedRows<[f32; 2]>, w: usize, r: usize) -> &[[f32; 2]] {
 /// A padded field of [`System`], one allocation per row. Row-sized pieces fit the gaps other
 /// arrays leave: in wasm, where the allocator grows the memory by a whole request whenever no
 /// gap holds it, one array of a full level's coefficients (28 bytes a pixel) made the flow's
-/// memory grow by a third more than it ever held at once.
+/// memory grow by half again what it ever held at once.
 struct PaddedRows<T> {
     rows: Vec<Vec<T>>,
 }

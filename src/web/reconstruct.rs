@@ -34,7 +34,7 @@ use crate::colormap::{depth_legend, depth_picture, inverse_depth_range};
 use crate::error::Error;
 use crate::export::{self, ExportFile};
 use crate::flow::colour::flow_picture_with_reliability;
-use crate::flow::{FlowParams, Preset, compute_direction, pair_from_directions};
+use crate::flow::{FlowParams, Preset, compute_direction};
 use crate::formats::ply::Encoding;
 use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
 use crate::input::{DEFAULT_MAX_SIDE, FramePair, MIN_SIDE, prepare_pair};
@@ -272,8 +272,11 @@ pub fn reconstruct_unfused(
                 let vectors = data.chunks_exact(2).map(|v| [v[0], v[1]]).collect();
                 crate::Grid::from_vec(w, h, vectors).map_err(js_error)
             };
-            let joined = pair_from_directions(field(forward)?, field(backward)?, &params);
-            FlowInput::Computed(params, Box::new(joined.map_err(js_error)?))
+            FlowInput::Computed {
+                params,
+                forward: field(forward)?,
+                backward: field(backward)?,
+            }
         }
         _ => {
             return Err(js_error(Error::InvalidParameter(
@@ -281,7 +284,7 @@ pub fn reconstruct_unfused(
             )));
         }
     };
-    let given = matches!(flow, FlowInput::Computed(..));
+    let given = matches!(flow, FlowInput::Computed { .. });
     let mut report = progress_callback(progress);
     let mut rec = crate::pipeline::reconstruct_unfused(&pair, flow, &options.params, &mut report)
         .map_err(js_error)?;
@@ -332,10 +335,13 @@ pub fn flow_direction(
     Ok(flow.data().iter().flat_map(|&[u, v]| [u, v]).collect())
 }
 
-/// The run's options from their JSON ([`RunOptions`]).
+/// The run's options from their JSON ([`RunOptions`]), their parameters checked
+/// ([`Params::validate`]).
 fn parse_options(options: &str) -> Result<RunOptions, JsValue> {
-    serde_json::from_str(options)
-        .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))
+    let options: RunOptions = serde_json::from_str(options)
+        .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))?;
+    options.params.validate().map_err(js_error)?;
+    Ok(options)
 }
 
 /// The frames as the pipeline takes them (at the working size, the camera resolved) and the
