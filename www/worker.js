@@ -94,23 +94,39 @@ let current = null;
 /** Bytes of RGBA read from a canvas at a time by readFrame (a few rows, not the whole frame). */
 const STRIP_BYTES = 4 * 2 ** 20;
 
-/** The RGBA pixels of an ImageBitmap (closed here): { width, height, data }. */
-function pixelsOf(bitmap) {
+/**
+ * An ImageBitmap (closed here) drawn on a canvas to read its pixels from: { context, width,
+ * height, release }; `release()` frees the canvas's pixels now rather than at the next garbage
+ * collection.
+ */
+function drawn(bitmap) {
   const { width, height } = bitmap;
   const canvas = new OffscreenCanvas(width, height);
   const context = canvas.getContext('2d', { willReadFrequently: true });
   context.drawImage(bitmap, 0, 0);
   bitmap.close();
+  const release = () => {
+    canvas.width = 0;
+    canvas.height = 0;
+  };
+  return { context, width, height, release };
+}
+
+/** Rows of `width` RGBA pixels in a strip of STRIP_BYTES (at least one). */
+const stripRows = (width) => Math.max(1, Math.floor(STRIP_BYTES / (4 * width)));
+
+/** The RGBA pixels of an ImageBitmap (closed here): { width, height, data }. */
+function pixelsOf(bitmap) {
+  const { context, width, height, release } = drawn(bitmap);
   const { data } = context.getImageData(0, 0, width, height);
-  canvas.width = 0;
-  canvas.height = 0;
+  release();
   return { width, height, data };
 }
 
 /** A wasm FrameBuilder of RGBA `pixels` ({ width, height, data }), given in strips of rows. */
 function builderOf({ width, height, data }) {
   const frame = new soup.FrameBuilder(width, height);
-  const rows = Math.max(1, Math.floor(STRIP_BYTES / (4 * width)));
+  const rows = stripRows(width);
   for (let y = 0; y < height; y += rows) {
     frame.pushRows(data.subarray(4 * width * y, 4 * width * Math.min(height, y + rows)));
   }
@@ -119,19 +135,13 @@ function builderOf({ width, height, data }) {
 
 /** The pixels of an ImageBitmap (closed here) in a wasm FrameBuilder, read in strips of rows. */
 function readFrame(bitmap) {
-  const { width, height } = bitmap;
-  const canvas = new OffscreenCanvas(width, height);
-  const context = canvas.getContext('2d', { willReadFrequently: true });
-  context.drawImage(bitmap, 0, 0);
-  bitmap.close();
+  const { context, width, height, release } = drawn(bitmap);
   const frame = new soup.FrameBuilder(width, height);
-  const rows = Math.max(1, Math.floor(STRIP_BYTES / (4 * width)));
+  const rows = stripRows(width);
   for (let y = 0; y < height; y += rows) {
     frame.pushRows(context.getImageData(0, y, width, Math.min(rows, height - y)).data);
   }
-  // Release the canvas's pixels now rather than at the next garbage collection.
-  canvas.width = 0;
-  canvas.height = 0;
+  release();
   return frame;
 }
 

@@ -173,10 +173,8 @@ pub fn compute_flow(
     params: &FlowParams,
     progress: &mut dyn FnMut(f32),
 ) -> Result<FlowPair> {
-    let (finest, coarsest) = check_inputs(frame1, frame2, params)?;
+    let (pyramid1, pyramid2, finest) = pyramids(frame1, frame2, params)?;
     progress(0.0);
-    let pyramid1 = pyramid::build(&to_gray(frame1), finest, coarsest);
-    let pyramid2 = pyramid::build(&to_gray(frame2), finest, coarsest);
     // Each direction is half the work.
     let forward = direction(&pyramid1, &pyramid2, frame1, finest, params, &mut |f| {
         progress(0.5 * f)
@@ -198,10 +196,8 @@ pub fn compute_direction(
     params: &FlowParams,
     progress: &mut dyn FnMut(f32),
 ) -> Result<FlowField> {
-    let (finest, coarsest) = check_inputs(from, to, params)?;
+    let (pyramid_from, pyramid_to, finest) = pyramids(from, to, params)?;
     progress(0.0);
-    let pyramid_from = pyramid::build(&to_gray(from), finest, coarsest);
-    let pyramid_to = pyramid::build(&to_gray(to), finest, coarsest);
     direction(&pyramid_from, &pyramid_to, from, finest, params, progress)
 }
 
@@ -237,17 +233,24 @@ pub fn pair_from_directions(
     })
 }
 
-/// The pyramid levels (finest, coarsest) DIS computes for two frames, once they are checked:
-/// same size, valid parameters, sides of at least a patch.
-fn check_inputs(frame1: &Frame, frame2: &Frame, params: &FlowParams) -> Result<(usize, usize)> {
+/// The grey pyramids of two frames over the levels DIS computes, and the finest of those
+/// levels, once the frames and parameters are checked: same size, valid parameters, sides of at
+/// least a patch.
+fn pyramids(
+    frame1: &Frame,
+    frame2: &Frame,
+    params: &FlowParams,
+) -> Result<(Vec<pyramid::Level>, Vec<pyramid::Level>, usize)> {
     frame1.check_same_size(frame2)?;
     params.validate()?;
     let (w, h) = frame1.size();
-    dis::levels(w, h, &params.dis).ok_or(Error::TooSmall {
+    let (finest, coarsest) = dis::levels(w, h, &params.dis).ok_or(Error::TooSmall {
         width: w,
         height: h,
         min: dis::PATCH,
-    })
+    })?;
+    let build = |frame| pyramid::build(&to_gray(frame), finest, coarsest);
+    Ok((build(frame1), build(frame2), finest))
 }
 
 /// The flow from the frame of pyramid `from` (its colour frame `colour`) to that of `to` at full

@@ -79,12 +79,7 @@ pub fn compute_flow(
     let (w, h) = (usize::try_from(width)?, usize::try_from(height)?);
     let frame1 = frame_from_rgba(rgba1, w, h)?;
     let frame2 = frame_from_rgba(rgba2, w, h)?;
-    let mut report = |fraction: f32| {
-        if let Some(callback) = &progress {
-            // A throwing callback must not abort the computation.
-            let _ = callback.call1(&JsValue::NULL, &JsValue::from_f64(fraction.into()));
-        }
-    };
+    let mut report = super::fraction_callback(progress);
     let pair = crate::flow::compute_flow(&frame1, &frame2, &params, &mut report)?;
     Ok(FlowResult {
         width,
@@ -94,6 +89,6 @@ pub fn compute_flow(
 }
 
 /// A flow field as `u, v` pairs row by row.
-fn interleaved(flow: &crate::flow::FlowField) -> Vec<f32> {
+pub(super) fn interleaved(flow: &crate::flow::FlowField) -> Vec<f32> {
     flow.data().iter().flat_map(|&[u, v]| [u, v]).collect()
 }

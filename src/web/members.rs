@@ -212,7 +212,7 @@ fn vote_buffers(seen: Observed, params: &Params, count: u32) -> Result<VoteBuffe
 
 /// A `w × h` grid of `values`, `per_pixel` of them per pixel made into one by `pixel`
 /// (`values` has `per_pixel · w · h`, checked by the caller); `values` is dropped on return.
-fn grid<T: Copy, P>(
+pub(super) fn grid<T: Copy, P>(
     w: usize,
     h: usize,
     values: Vec<T>,

@@ -104,6 +104,16 @@ pub fn decode_image_info(bytes: &[u8]) -> Result<ImageInfo, JsError> {
     })
 }
 
+/// A `progress(fraction)` for the library from an optional JavaScript callback: calls it with the
+/// share of the work done (0 to 1) when given; a callback that throws does not abort the work.
+fn fraction_callback(progress: Option<js_sys::Function>) -> impl FnMut(f32) {
+    move |fraction: f32| {
+        if let Some(callback) = &progress {
+            let _ = callback.call1(&JsValue::NULL, &JsValue::from_f64(fraction.into()));
+        }
+    }
+}
+
 /// A frame as opaque RGBA bytes, ready for `new ImageData(...)`.
 fn rgba(frame: &Frame) -> Vec<u8> {
     frame

@@ -269,8 +269,7 @@ pub fn reconstruct_unfused(
                         data.len()
                     ))));
                 }
-                let vectors = data.chunks_exact(2).map(|v| [v[0], v[1]]).collect();
-                crate::Grid::from_vec(w, h, vectors).map_err(js_error)
+                super::members::grid(w, h, data, |v| [v[0], v[1]], 2).map_err(js_error)
             };
             FlowInput::Computed {
                 params,
@@ -324,15 +323,10 @@ pub fn flow_direction(
     } else {
         (&pair.frame1, &pair.frame2)
     };
-    let mut report = |fraction: f32| {
-        if let Some(callback) = &progress {
-            // A throwing callback must not abort the computation.
-            let _ = callback.call1(&JsValue::NULL, &JsValue::from_f64(fraction.into()));
-        }
-    };
     let params = FlowParams::preset(options.flow_preset);
+    let mut report = super::fraction_callback(progress);
     let flow = compute_direction(from, to, &params, &mut report).map_err(js_error)?;
-    Ok(flow.data().iter().flat_map(|&[u, v]| [u, v]).collect())
+    Ok(super::flow::interleaved(&flow))
 }
 
 /// The run's options from their JSON ([`RunOptions`]), their parameters checked
