@@ -192,16 +192,46 @@ pub enum FlowInput {
     /// Computed from the two frames by [`compute_flow`] (DIS with variational refinement, both
     /// ways); vectors failing the forward–backward check are not trusted.
     Compute(FlowParams),
-    /// `Compute` with these parameters, whose first flow's two directions were computed already
-    /// at the working resolution ([`crate::flow::compute_direction`]; the page computes one in
-    /// a helper worker): the forward–backward check joins them
-    /// ([`crate::flow::pair_from_directions`]) to what `compute_flow` gives. Later passes
-    /// compute their finer flow as `Compute` does.
-    Computed {
-        params: FlowParams,
-        forward: FlowField,
-        backward: FlowField,
-    },
+}
+
+/// Where the two directions of a computed flow come from (frame 1 → 2 and frame 2 → 1, at the
+/// working size, as [`crate::flow::compute_direction`] gives them): `None` leaves them to the
+/// pipeline, which computes them ([`flow_both_ways`]). Natively nothing else gives them
+/// ([`ComputedHere`]); the page's worker gives them from its workers, asynchronously: one
+/// direction computed in a helper worker while the worker computes the other, or directions it
+/// holds already (`src/web/reconstruct.rs`). The pipeline joins them with the forward–backward
+/// check ([`crate::flow::pair_from_directions`]), so the flow is the same bits either way.
+pub(crate) trait Directions {
+    /// The two directions of the flow with `params` between the frames, or `None`.
+    fn directions(
+        &mut self,
+        params: &FlowParams,
+    ) -> impl Future<Output = Result<Option<(FlowField, FlowField)>>>;
+}
+
+/// The [`Directions`] that gives none: the pipeline computes every flow itself.
+pub(crate) struct ComputedHere;
+
+impl Directions for ComputedHere {
+    async fn directions(&mut self, _params: &FlowParams) -> Result<Option<(FlowField, FlowField)>> {
+        Ok(None)
+    }
+}
+
+/// The result of `future`, which must never wait (it is polled once): the pipeline's futures
+/// wait only on a [`Directions`] that does, and natively [`ComputedHere`] never does.
+fn without_waiting<T>(future: impl Future<Output = Result<T>>) -> Result<T> {
+    use std::task::{Context, Poll, Waker};
+    let mut future = std::pin::pin!(future);
+    match future
+        .as_mut()
+        .poll(&mut Context::from_waker(Waker::noop()))
+    {
+        Poll::Ready(result) => result,
+        Poll::Pending => Err(Error::InvalidParameter(
+            "a flow source waited where none may".into(),
+        )),
+    }
 }
 
 /// Milliseconds per stage and the solve's numbers, for `report.json` and the page.
@@ -366,20 +396,36 @@ pub fn reconstruct_unfused(
     params: &Params,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
+    without_waiting(reconstruct_unfused_from(
+        pair,
+        flow,
+        params,
+        &mut ComputedHere,
+        progress,
+    ))
+}
+
+/// [`reconstruct_unfused`] with the computed flows' directions from `directions` (where it gives
+/// them; the page's worker, `src/web/reconstruct.rs`), waiting for them where it waits.
+pub(crate) async fn reconstruct_unfused_from(
+    pair: &FramePair,
+    flow: FlowInput,
+    params: &Params,
+    directions: &mut impl Directions,
+    progress: &mut dyn FnMut(Stage, f32),
+) -> Result<Reconstruction> {
     params.validate()?;
     match flow {
         FlowInput::Given(given) => {
-            let mut rec = reconstruct_from(pair, FlowInput::Given(given), params, None, progress)?;
+            let input = FlowInput::Given(given);
+            let mut rec = reconstruct_from(pair, input, params, None, directions, progress).await?;
             let note = ambiguity_note(rec.report.ego_rival, &params.init);
             rec.report.notes.extend(note);
             Ok(rec)
         }
-        FlowInput::Compute(first) => reconstruct_until_pinned(pair, first, None, params, progress),
-        FlowInput::Computed {
-            params: first,
-            forward,
-            backward,
-        } => reconstruct_until_pinned(pair, first, Some((forward, backward)), params, progress),
+        FlowInput::Compute(first) => {
+            reconstruct_until_pinned(pair, first, params, directions, progress).await
+        }
     }
 }
 
@@ -460,8 +506,8 @@ impl Pass {
     }
 }
 
-/// Passes of [`reconstruct_from`] from the flow of `first` (its directions `first_flow` when
-/// they were computed already), then of the next finer preset while
+/// Passes of [`reconstruct_from`] from the flow of `first` (each flow's directions from
+/// `directions` where it gives them), then of the next finer preset while
 /// the last pass pins less than [`Params::min_pinned_share`] (flow too coarse to show where
 /// movers meet the world leaves their scales to guesses), its camera motion is ambiguous
 /// (flow too coarse to tell the camera's motion from a compromise with the movers) or it found
@@ -477,22 +523,15 @@ impl Pass {
 /// pass whose camera motion is ambiguous keeps only its superpixels and graphs: any finer pass
 /// replaces it, so it is made again whole only where every later pass fails. A later pass that
 /// fails leaves the best one so far, with a note.
-fn reconstruct_until_pinned(
+async fn reconstruct_until_pinned(
     pair: &FramePair,
     first: FlowParams,
-    first_flow: Option<(FlowField, FlowField)>,
     params: &Params,
+    directions: &mut impl Directions,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
-    let input = match first_flow {
-        Some((forward, backward)) => FlowInput::Computed {
-            params: first,
-            forward,
-            backward,
-        },
-        None => FlowInput::Compute(first),
-    };
-    let first_pass = reconstruct_from(pair, input, params, None, progress)?;
+    let input = FlowInput::Compute(first);
+    let first_pass = reconstruct_from(pair, input, params, None, directions, progress).await?;
     let mut best = Pass::of(&first_pass, first);
     let mut last = best;
     let mut notes = first_pass.report.notes.clone();
@@ -512,8 +551,11 @@ fn reconstruct_until_pinned(
             FlowInput::Compute(finer),
             params,
             held.segmentation(),
+            directions,
             progress,
-        ) {
+        )
+        .await
+        {
             Ok(again) => {
                 notes.extend_from_slice(&again.report.notes[pair.notes.len()..]);
                 spent.extend_from_slice(&again.report.timings_ms);
@@ -541,7 +583,9 @@ fn reconstruct_until_pinned(
                 100.0 * last.pinned,
                 preset_name(&last.used),
             ));
-            aside.restore(pair, &mut spent, progress)?
+            aside
+                .restore(pair, &mut spent, directions, progress)
+                .await?
         }
         Held::Dropped(segmentation) => {
             notes.push(format!(
@@ -554,8 +598,10 @@ fn reconstruct_until_pinned(
                 FlowInput::Compute(best.asked),
                 params,
                 Some(&segmentation),
+                directions,
                 progress,
-            )?;
+            )
+            .await?;
             spent.extend_from_slice(&again.report.timings_ms);
             again
         }
@@ -648,14 +694,16 @@ impl SetAside {
     }
 
     /// The reconstruction again, from `pair` (the pair it was made from): its flow computed
-    /// again with the parameters it used (deterministic, so the same flow and trust mask), its
+    /// again with the parameters it used (deterministic, so the same flow and trust mask; its
+    /// directions from `directions` where it gives them), its
     /// depth maps made from its soup as its pass made them. The stages' times go to `spent`;
     /// `progress` hears of it all as [`Stage::Outputs`] (the flow's share first), since no new
     /// pass starts (the page's progress bar counts a return to the flow as one).
-    fn restore(
+    async fn restore(
         self,
         pair: &FramePair,
         spent: &mut Vec<(Stage, f64)>,
+        directions: &mut impl Directions,
         progress: &mut dyn FnMut(Stage, f32),
     ) -> Result<Reconstruction> {
         let SetAside {
@@ -675,9 +723,10 @@ impl SetAside {
             forward: flow,
             reliable,
             ..
-        } = flow_both_ways(pair, &used, &mut |f| {
+        } = flow_of(pair, &used, directions, &mut |f| {
             progress(Stage::Outputs, RESTORED_FLOW_SHARE * f)
-        })?;
+        })
+        .await?;
         clock.lap(Stage::Flow);
         let k = report.camera.intrinsics;
         let inputs = segmentation.scale_inputs(&flow, &reliable, &k);
@@ -797,11 +846,12 @@ impl Segmentation {
 /// One pass of the pipeline: flow (given, or computed by [`trusted_flow`]), superpixels (or a
 /// copy of `segmentation`, made by an earlier pass with the same frame 1 and parameters),
 /// unit-scale soup, scales, refinement and outputs.
-fn reconstruct_from(
+async fn reconstruct_from(
     pair: &FramePair,
     flow: FlowInput,
     params: &Params,
     segmentation: Option<&Segmentation>,
+    directions: &mut impl Directions,
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
     let (w, h) = pair.frame1.size();
@@ -820,26 +870,12 @@ fn reconstruct_from(
             let (computed, used) = trusted_flow(
                 pair,
                 flow_params,
-                None,
+                directions,
                 params.min_reliable_flow,
                 &mut notes,
                 &mut |f| progress(Stage::Flow, f),
-            )?;
-            (computed.forward, computed.reliable, Some(used))
-        }
-        FlowInput::Computed {
-            params: flow_params,
-            forward,
-            backward,
-        } => {
-            let (computed, used) = trusted_flow(
-                pair,
-                flow_params,
-                Some((forward, backward)),
-                params.min_reliable_flow,
-                &mut notes,
-                &mut |f| progress(Stage::Flow, f),
-            )?;
+            )
+            .await?;
             (computed.forward, computed.reliable, Some(used))
         }
     };
@@ -1161,8 +1197,8 @@ fn vote_of(
 /// Flow both ways between the pair's frames with `params`, as [`compute_flow`] gives it (the
 /// same bits): natively, on a machine with more than one core, the backward direction on a
 /// thread of its own while the calling thread computes the forward one (each is half the flow's
-/// time); in wasm one after the other (the page computes them in two workers instead,
-/// [`FlowInput::Computed`]). `progress` gets the share done in [0, 1] (with two threads, that of
+/// time); in wasm one after the other (the page computes them in two workers instead, and gives
+/// them through [`Directions`]). `progress` gets the share done in [0, 1] (with two threads, that of
 /// the forward direction). Errors as `compute_flow`'s.
 fn flow_both_ways(
     pair: &FramePair,
@@ -1279,8 +1315,8 @@ where
     slots.into_iter().flatten().collect()
 }
 
-/// Flow by [`compute_flow`] with `params` ([`flow_both_ways`]; from the directions `first`
-/// when they were computed already), computed again with the next finer preset
+/// Flow by [`compute_flow`] with `params` ([`flow_of`]: from `directions` where it gives them),
+/// computed again with the next finer preset
 /// ([`FlowParams::finer`]) while less than `min_reliable` of the pixels passes the
 /// forward–backward check (large motions that the coarser preset tracks badly); the pass with
 /// the most trusted pixels is kept, with the parameters it used. Each new pass adds a note, and
@@ -1290,44 +1326,24 @@ where
 /// one gets the share of what is left that its preset's cost has beside the finer one's
 /// ([`Preset::relative_cost`]); the last possible pass (every pass when `min_reliable` is 0)
 /// gets all that is left.
-fn trusted_flow(
+async fn trusted_flow(
     pair: &FramePair,
     params: FlowParams,
-    first: Option<(FlowField, FlowField)>,
+    directions: &mut impl Directions,
     min_reliable: f64,
     notes: &mut Vec<String>,
     progress: &mut dyn FnMut(f32),
 ) -> Result<(FlowPair, FlowParams)> {
-    let first = match first {
-        Some((forward, backward)) => {
-            let (w, h) = pair.frame1.size();
-            if forward.size() != (w, h) {
-                return Err(Error::InvalidParameter(format!(
-                    "the given flow is {}×{}; the frames are {w}×{h}",
-                    forward.width(),
-                    forward.height()
-                )));
-            }
-            Some(crate::flow::pair_from_directions(
-                forward, backward, &params,
-            )?)
-        }
-        None => None,
-    };
     let mut start = 0.0f32;
-    let mut run = |p: &FlowParams, given: Option<FlowPair>| -> Result<(f64, FlowPair)> {
-        let cost = |p: &FlowParams| p.named_preset().map_or(1.0, Preset::relative_cost);
-        let next = p.finer().filter(|_| min_reliable > 0.0);
-        let share = next.map_or(1.0, |f| cost(p) / (cost(p) + cost(&f)));
-        let (from, span) = (start, share * (1.0 - start));
-        let computed = match given {
-            Some(computed) => computed,
-            None => flow_both_ways(pair, p, &mut |f| progress(from + span * f))?,
-        };
-        start += span;
-        Ok((trusted_share(&computed.reliable), computed))
-    };
-    let (mut trusted, mut best) = run(&params, first)?;
+    let (mut trusted, mut best) = spanned_flow(
+        pair,
+        &params,
+        directions,
+        min_reliable,
+        &mut start,
+        progress,
+    )
+    .await?;
     let (mut best_share, mut best_params, mut used) = (trusted, params, params);
     while let Some(finer) = used.finer().filter(|_| trusted < min_reliable) {
         notes.push(format!(
@@ -1337,7 +1353,8 @@ fn trusted_flow(
             preset_name(&used),
             preset_name(&finer),
         ));
-        let (share, flow) = run(&finer, None)?;
+        let (share, flow) =
+            spanned_flow(pair, &finer, directions, min_reliable, &mut start, progress).await?;
         if share > best_share {
             (best_share, best, best_params) = (share, flow, finer);
         }
@@ -1354,6 +1371,53 @@ fn trusted_flow(
     }
     progress(1.0);
     Ok((best, best_params))
+}
+
+/// The flow with `params` of one of [`trusted_flow`]'s passes ([`flow_of`]) and its share of
+/// trusted pixels. Its progress goes to `progress` from `start`, over its share of what is left
+/// (see [`trusted_flow`]), and `start` moves past it.
+async fn spanned_flow(
+    pair: &FramePair,
+    params: &FlowParams,
+    directions: &mut impl Directions,
+    min_reliable: f64,
+    start: &mut f32,
+    progress: &mut dyn FnMut(f32),
+) -> Result<(f64, FlowPair)> {
+    let cost = |p: &FlowParams| p.named_preset().map_or(1.0, Preset::relative_cost);
+    let next = params.finer().filter(|_| min_reliable > 0.0);
+    let share = next.map_or(1.0, |f| cost(params) / (cost(params) + cost(&f)));
+    let (from, span) = (*start, share * (1.0 - *start));
+    let computed = flow_of(pair, params, directions, &mut |f| progress(from + span * f)).await?;
+    *start += span;
+    Ok((trusted_share(&computed.reliable), computed))
+}
+
+/// The flow with `params` between the pair's frames, as [`compute_flow`] gives it: from the
+/// two directions `directions` gives (checked to be of the frames' size), else computed
+/// ([`flow_both_ways`]). `progress` gets the share done in [0, 1].
+async fn flow_of(
+    pair: &FramePair,
+    params: &FlowParams,
+    directions: &mut impl Directions,
+    progress: &mut dyn FnMut(f32),
+) -> Result<FlowPair> {
+    let Some((forward, backward)) = directions.directions(params).await? else {
+        return flow_both_ways(pair, params, progress);
+    };
+    let (w, h) = pair.frame1.size();
+    for given in [&forward, &backward] {
+        if given.size() != (w, h) {
+            return Err(Error::InvalidParameter(format!(
+                "a given flow direction is {}×{}; the frames are {w}×{h}",
+                given.width(),
+                given.height()
+            )));
+        }
+    }
+    let flow = crate::flow::pair_from_directions(forward, backward, params)?;
+    progress(1.0);
+    Ok(flow)
 }
 
 /// Wall-clock lap timer of the stages, natively and in the browser (where `Instant` is

@@ -4,6 +4,9 @@
 //! JavaScript `Error`s.
 #![cfg(target_arch = "wasm32")]
 
+use std::cell::RefCell;
+use std::rc::Rc;
+
 use js_sys::Function;
 use superpixel_soup::Params;
 use superpixel_soup::eval::depth_metrics;
@@ -19,6 +22,7 @@ use superpixel_soup::web::reconstruct::{
     FrameBuilder, PAGE_FLOW_PRESET, PageReconstruction, flow_direction, page_defaults, page_params,
     read_exif, reconstruct, reconstruct_unfused, resolve_intrinsics_json,
 };
+use wasm_bindgen::closure::Closure;
 use wasm_bindgen::{JsCast, JsValue};
 use wasm_bindgen_test::{wasm_bindgen_test, wasm_bindgen_test_configure};
 
@@ -63,7 +67,7 @@ fn name_and_message(error: JsValue) -> (String, String) {
 #[wasm_bindgen_test]
 fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
     let scene = render(SceneKind::Street, 192, 82).unwrap();
-    let stages = std::rc::Rc::new(std::cell::RefCell::new(Vec::<String>::new()));
+    let stages = Rc::new(RefCell::new(Vec::<String>::new()));
     let seen = stages.clone();
     let progress = wasm_bindgen::closure::Closure::<dyn FnMut(String, f64)>::new(
         move |stage: String, fraction: f64| {
@@ -380,60 +384,126 @@ fn frames_decoded_smaller_keep_the_photos_size_for_outputs_and_checks() {
     );
 }
 
-#[wasm_bindgen_test]
-fn flow_directions_come_both_or_neither_and_fit_the_frames() {
-    let s = render(SceneKind::Street, 64, 48).unwrap();
-    let options = options("{}");
-    let unfused = |forward, backward| {
-        reconstruct_unfused(
-            builder(&s.frame1),
-            builder(&s.frame2),
-            &options,
-            None,
-            forward,
-            backward,
-            None,
-        )
-    };
-    let (name, message) =
-        name_and_message(unfused(Some(vec![0.0; 2 * 64 * 48]), None).err().unwrap());
-    assert_eq!(name, "InvalidParameterError");
-    assert!(message.contains("both flow directions"), "{message}");
-    let short = || Some(vec![0.0; 10]);
-    let (_, message) = name_and_message(unfused(short(), short()).err().unwrap());
-    assert!(message.contains("10 numbers for 64×48"), "{message}");
+/// A `directions` function for `reconstructUnfused` (www/worker.js's way) that records the
+/// presets it is asked for in `asked` and answers each with `answer(preset)`.
+fn directions(
+    asked: &Rc<RefCell<Vec<String>>>,
+    mut answer: impl FnMut(&str) -> JsValue + 'static,
+) -> Function {
+    let asked = asked.clone();
+    let request = Closure::<dyn FnMut(String) -> js_sys::Promise>::new(move |preset: String| {
+        let value = answer(&preset);
+        asked.borrow_mut().push(preset);
+        js_sys::Promise::resolve(&value)
+    });
+    request.into_js_value().unchecked_into()
+}
+
+/// `{ forward, backward }` as the worker gives a flow's directions.
+fn directions_object(forward: &[f32], backward: &[f32]) -> JsValue {
+    let object = js_sys::Object::new();
+    for (key, data) in [("forward", forward), ("backward", backward)] {
+        let array = js_sys::Float32Array::from(data);
+        js_sys::Reflect::set(&object, &key.into(), &array).unwrap();
+    }
+    object.into()
+}
+
+/// Answers for `directions` as a helper worker and the worker give them: the two directions of
+/// the asked preset's flow between `one` and `two` with the options `json` ([`flow_direction`]),
+/// as if computed before the run in `ms` milliseconds.
+fn computed_directions(
+    one: &Frame,
+    two: &Frame,
+    json: &str,
+    ms: f64,
+) -> impl FnMut(&str) -> JsValue + use<> {
+    let (one, two, json) = (one.clone(), two.clone(), json.to_string());
+    move |preset: &str| {
+        let mut with_preset: serde_json::Value = serde_json::from_str(&json).unwrap();
+        with_preset["flowPreset"] = preset.into();
+        let with_preset = with_preset.to_string();
+        let direction = |backward| {
+            flow_direction(builder(&one), builder(&two), &with_preset, backward, None).unwrap()
+        };
+        let given = directions_object(&direction(false), &direction(true));
+        js_sys::Reflect::set(&given, &"ms".into(), &ms.into()).unwrap();
+        given
+    }
 }
 
 #[wasm_bindgen_test]
-fn members_made_in_other_workers_fuse_to_the_same_result() {
-    // The worker's way (www/worker.js): the first flow's directions apart (one in a helper
-    // worker), the kept pass, each member's vote from the copied inputs (in a helper worker, here
-    // in turn), the votes added in the order of their counts, then the fusion; the same files
-    // and report as the one-call reconstruct, but for times.
+async fn flow_directions_given_apart_fit_the_frames_and_give_the_same_result() {
+    let s = render(SceneKind::Street, 64, 48).unwrap();
+    let options = options("{}");
+    let asked = Rc::new(RefCell::new(Vec::new()));
+    let unfused = |answer: JsValue| {
+        let request = directions(&asked, move |_| answer.clone());
+        reconstruct_unfused(
+            builder(&s.frame1),
+            builder(&s.frame2),
+            options.clone(),
+            None,
+            Some(request),
+        )
+    };
+    let half = js_sys::Object::new();
+    let full = js_sys::Float32Array::from(&vec![0.0f32; 2 * 64 * 48][..]);
+    js_sys::Reflect::set(&half, &"forward".into(), &full).unwrap();
+    let (name, message) = name_and_message(unfused(half.into()).await.err().unwrap());
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("no backward direction"), "{message}");
+    let short = directions_object(&[0.0; 10], &[0.0; 10]);
+    let (_, message) = name_and_message(unfused(short).await.err().unwrap());
+    assert!(message.contains("10 numbers for 64×48"), "{message}");
+    // `null` leaves the directions to the pipeline, which computes them (here in two passes,
+    // the second asking for preset high's flow).
+    let mut computed = unfused(JsValue::NULL).await.unwrap();
+    assert_eq!(*asked.borrow(), ["fine", "fine", "fine", "high"]);
+    // The finer pass's flow given apart too: the same files as the one-call reconstruct.
+    asked.borrow_mut().clear();
+    let request = directions(
+        &asked,
+        computed_directions(&s.frame1, &s.frame2, &options, 0.0),
+    );
+    let mut apart = reconstruct_unfused(
+        builder(&s.frame1),
+        builder(&s.frame2),
+        options.clone(),
+        None,
+        Some(request),
+    )
+    .await
+    .unwrap();
+    assert_eq!(*asked.borrow(), ["fine", "high"]);
+    for file in ["depth.pfm", "flow.flo", "frame1.ply"] {
+        let here = computed.export_file(file).unwrap();
+        assert_eq!(apart.export_file(file).unwrap(), here, "{file}");
+    }
+}
+
+#[wasm_bindgen_test]
+async fn members_made_in_other_workers_fuse_to_the_same_result() {
+    // The worker's way (www/worker.js): each flow's directions apart (one in a helper worker),
+    // the kept pass, each member's vote from the copied inputs (in a helper worker, here in
+    // turn), the votes added in the order of their counts, then the fusion; the same files and
+    // report as the one-call reconstruct, but for times.
     let s = render(SceneKind::Street, 256, 110).unwrap();
     let options = options("{}");
     let mut whole = run(&s.frame1, &s.frame2, &options).unwrap();
-    let direction = |backward| {
-        flow_direction(
-            builder(&s.frame1),
-            builder(&s.frame2),
-            &options,
-            backward,
-            None,
-        )
-        .unwrap()
-    };
-    let (forward, backward) = (direction(false), direction(true));
+    let asked = Rc::new(RefCell::new(Vec::new()));
+    let answer = computed_directions(&s.frame1, &s.frame2, &options, 1000.0);
+    let request = directions(&asked, answer);
     let mut parts = reconstruct_unfused(
         builder(&s.frame1),
         builder(&s.frame2),
-        &options,
+        options.clone(),
         None,
-        Some(forward),
-        Some(backward),
-        Some(1000.0),
+        Some(request),
     )
+    .await
     .unwrap();
+    assert_eq!(*asked.borrow(), ["fine"]);
     let inputs = parts.member_inputs();
     let counts = parts.member_counts().to_vec();
     assert_eq!(counts, vec![140, 160, 130, 170]);
@@ -499,7 +569,7 @@ fn members_made_in_other_workers_fuse_to_the_same_result() {
         json
     };
     assert_eq!(without_times(&parts), without_times(&whole));
-    // The flow's time counts the directions' 1000 ms.
+    // The flow's time counts the 1000 ms the directions took before the run.
     let flow_ms = report(&parts)["timings_ms"]
         .as_array()
         .unwrap()

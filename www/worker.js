@@ -13,10 +13,11 @@
 // MAX_THREADS − 1 helper workers (this same script with `?helper=1`, nested, given this
 // worker's compiled module), each makes some of the members (a `MemberSource` from a copy of
 // the run's inputs) while this worker makes the rest (`memberVote`), and this worker fuses the
-// votes (src/web/members.rs). Before that, while this worker computes the first flow from frame 1
-// to frame 2, the first helper computes it from frame 2 to frame 1 (`directionsApart`: each
-// direction is half the flow's time). The result is the same, bit for bit, however many make
-// them. A helper that cannot start or crashes leaves its work to this worker. `worker.js?threads=1`
+// votes (src/web/members.rs). Before that, while this worker computes a flow from frame 1 to
+// frame 2, the first helper computes it from frame 2 to frame 1 (`directionsApart`: each
+// direction is half the flow's time): the run's first flow, and a finer one where a pass asks for
+// it (`reconstructUnfused` asks for each flow's directions, src/web/reconstruct.rs). The result
+// is the same, bit for bit, however many make them. A helper that cannot start or crashes leaves its work to this worker. `worker.js?threads=1`
 // (the page's `?threads=1`) makes every member here, one after the other.
 //
 // Requests (each with an `id`; answered by { type: 'reply', id, ... } or { type: 'error', id, ... }):
@@ -30,9 +31,10 @@
 //       → { type: 'progress', id, stage, fraction }…, then a reply with the result (below);
 //       `quiet: true` (the page computing a result it already has again, www/pipeline.js):
 //       no progress and no result in the reply, the reconstruction is only kept; `flow`
-//       (optional): { forward, backward, ms }, the first flow's directions and the time they
-//       took, as an earlier run of the same frames and options gave them in its result
-//       (`result.flow`; the report's flow time then counts that time and this run's own)
+//       (optional): { forward, backward, preset, ms }, the first flow's directions and the
+//       time they took, as an earlier run of the same frames and options gave them in its
+//       result (`result.flow`): this run does not compute them, and its report's flow time
+//       counts that time
 //   { type: 'cloud', soup: 'organised' | 'scaled' | 'unorganised' } → { cloud }
 //   { type: 'export', name }                                → { bytes: ArrayBuffer, mediaType }
 //   { type: 'score-depth', name, bytes, pngScale }          → { score, picture: RGBA at the
@@ -43,7 +45,8 @@
 //       → { type: 'vote', id, index, vote: { width, height, depth, pinned } | error }… (one per
 //       count, `index` its place in `counts`), then a reply (a helper's request)
 //   { type: 'backward-flow', frames: [{ width, height, data: RGBA }, …], options (JSON) }
-//       → { flow: Float32Array } (the run's first flow frame 2 → 1; a helper's request)
+//       → { flow: Float32Array } (a flow of the run frame 2 → 1, with the options' flow preset;
+//       a helper's request)
 // Unasked: { type: 'ready', version, defaults, build } once the module is loaded (`build`: the
 // name of the wasm build in www/pkg/ it loaded); { type: 'failed', message } when it cannot be
 // loaded. A helper (`?helper=1`) first posts { type: 'waiting' }
@@ -166,10 +169,11 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   current = null;
   const [width, height] = [frames[0].width, frames[0].height];
   const wanted = threadsFor(options, quiet, width, height) - 1;
-  // With helpers, the first flow's two directions are computed at once (directionsApart), from
-  // the frames' pixels read whole here (at the working size) until they are in wasm; else the
-  // frames go to wasm in strips, never whole in JavaScript.
-  let pixels = wanted > 0 ? frames.map(pixelsOf) : null;
+  // With helpers, each flow's two directions are computed at once (directionsApart), from the
+  // frames' pixels read whole here (at the working size) and held through the run, for the
+  // passes that ask for finer flow; else the frames go to wasm in strips, never whole in
+  // JavaScript.
+  const pixels = wanted > 0 ? frames.map(pixelsOf) : null;
   const [one, two] = pixels === null ? frames.map(readFrame) : [null, null];
   const pixelsMs = performance.now() - clock;
   let last = { stage: '', fraction: -1 };
@@ -183,17 +187,42 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   };
   const start = performance.now();
   const json = JSON.stringify(options);
+  const firstPreset = options?.flowPreset ?? JSON.parse(soup.pageDefaults()).options.flowPreset;
   let made;
+  // The first flow's directions when computed apart here ({ forward, backward, apart, preset,
+  // ms }), and the milliseconds of directions computed before the run asked for them (handed
+  // to it, or computed first), which its report's flow time has yet to count.
   let firstFlow = null;
+  let uncountedMs = given?.ms ?? 0;
   // A nested worker loads its script through this worker's event loop: the helpers are
   // waited for here, not while the kept pass holds the loop.
   const helpers = await startHelpers(wanted);
+  // The directions of each flow the run computes (src/web/reconstruct.rs, `reconstructUnfused`,
+  // which asks with the flow's preset): the first flow's as this run was handed them or
+  // computed them (a pass kept after a finer one asks for them again), else computed apart with
+  // the first helper, else null (computed in wasm, one after the other).
+  const directions = async (preset) => {
+    const known = [given, firstFlow].find((flow) => flow?.preset === preset);
+    if (known === undefined && helpers.length > 0) {
+      const asked = JSON.stringify({ ...options, flowPreset: preset });
+      const flow = await directionsApart(pixels, asked, helpers, progress);
+      firstFlow ??= { ...flow, preset };
+      return flow;
+    }
+    const ms = uncountedMs;
+    uncountedMs = 0;
+    return known === undefined ? null : { forward: known.forward, backward: known.backward, ms };
+  };
   try {
-    const flow = given ?? (helpers.length > 0 ? await directionsApart(pixels, json, helpers, progress) : null);
-    firstFlow = flow;
+    if (given === null && helpers.length > 0) {
+      // The first flow before the pass holds the frames in wasm: the flow's peak holds only its own.
+      const computing = performance.now();
+      await directions(firstPreset);
+      firstFlow.ms = performance.now() - computing;
+      uncountedMs = firstFlow.ms;
+    }
     const [a, b] = pixels === null ? [one, two] : pixels.map(builderOf);
-    pixels = null; // in wasm now
-    made = soup.reconstructUnfused(a, b, json, progress, flow?.forward, flow?.backward, flow?.ms);
+    made = await untilAborted(soup.reconstructUnfused(a, b, json, progress, directions));
     await fuseMembers(made, json, helpers, progress);
   } catch (e) {
     if (!describe(e).fatal) {
@@ -229,7 +258,9 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
     memoryBytes: soup.memoryBytes(),
     // The first flow's directions when computed apart: the page gives them back to the run
     // that computes this result again (www/pipeline.js), which then need not compute them.
-    flow: firstFlow === null ? null : { forward: firstFlow.forward, backward: firstFlow.backward, ms: firstFlow.ms },
+    flow: firstFlow === null ? null : {
+      forward: firstFlow.forward, backward: firstFlow.backward, preset: firstFlow.preset, ms: firstFlow.ms,
+    },
   };
   const transfer = [...cloudTransfer(cloud), ...Object.values(pictures).map((p) => p.buffer)];
   if (firstFlow !== null) {
@@ -239,14 +270,37 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
 }
 
 /**
- * The first flow's two directions (src/web/reconstruct.rs, `flowDirection`) at once: frame
- * 2 → 1 in the first of `helpers`, 1 → 2 here, from RGBA `pixels` of both frames (the helper
- * gets copies). Resolves to { forward, backward } (Float32Arrays), `ms`, the time they took,
- * and `apart`, whether the helper computed one: a helper that fails is left out of the run
- * (terminated), and its direction is computed here after the other.
+ * `promise` (of an async wasm export), or rejected with the error of an abort of the wasm
+ * instance (out of memory, or a bug) while it is pending: the export's work runs in tasks of
+ * wasm-bindgen's, from which an abort escapes as an uncaught error (handled here, so that the
+ * page hears of it as the run's error) and leaves the promise pending.
+ */
+function untilAborted(promise) {
+  let listener;
+  const aborted = new Promise((_, reject) => {
+    listener = (event) => {
+      event.preventDefault();
+      reject(event.error ?? event.reason ?? new Error(event.message));
+    };
+  });
+  for (const type of ['error', 'unhandledrejection']) {
+    self.addEventListener(type, listener);
+  }
+  return Promise.race([promise, aborted]).finally(() => {
+    for (const type of ['error', 'unhandledrejection']) {
+      self.removeEventListener(type, listener);
+    }
+  });
+}
+
+/**
+ * A flow's two directions (src/web/reconstruct.rs, `flowDirection`, with the options `json`) at
+ * once: frame 2 → 1 in the first of `helpers`, 1 → 2 here, from RGBA `pixels` of both frames
+ * (the helper gets copies). Resolves to { forward, backward } (Float32Arrays) and `apart`,
+ * whether the helper computed one: a helper that fails is left out of the run (terminated), and
+ * its direction is computed here after the other.
  */
 async function directionsApart(pixels, json, helpers, progress) {
-  const start = performance.now();
   const helper = helpers[0];
   const copies = pixels.map(({ width, height, data }) => ({ width, height, data: data.slice() }));
   const asked = new Promise((resolve) => {
@@ -267,7 +321,7 @@ async function directionsApart(pixels, json, helpers, progress) {
     const [c, d] = pixels.map(builderOf);
     backward = soup.flowDirection(c, d, json, true, (f) => progress?.('flow', 0.5 + 0.5 * f));
   }
-  return { forward, backward, ms: performance.now() - start, apart };
+  return { forward, backward, apart };
 }
 
 /**

@@ -26,6 +26,7 @@ use std::borrow::Cow;
 use js_sys::Function;
 use serde::{Deserialize, Serialize};
 use wasm_bindgen::prelude::*;
+use wasm_bindgen_futures::JsFuture;
 
 use super::ground_truth::GroundTruthScores;
 use super::rgba;
@@ -34,12 +35,12 @@ use crate::colormap::{depth_legend, depth_picture, inverse_depth_range};
 use crate::error::Error;
 use crate::export::{self, ExportFile};
 use crate::flow::colour::flow_picture_with_reliability;
-use crate::flow::{FlowParams, Preset, compute_direction};
+use crate::flow::{FlowField, FlowParams, Preset, compute_direction};
 use crate::formats::ply::Encoding;
 use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
 use crate::input::{DEFAULT_MAX_SIDE, FramePair, MIN_SIDE, prepare_pair};
 use crate::output::{cloud_labels, confidence_picture, dense_depth, depth_at, point_clouds};
-use crate::pipeline::{FlowInput, Params, Reconstruction, Stage};
+use crate::pipeline::{Directions, FlowInput, Params, Reconstruction, Stage};
 use crate::superpixels::view::boundary_overlay;
 
 /// What the page asks for besides the pixels, as JSON with camelCase keys (`params` keeps the
@@ -222,8 +223,8 @@ impl FrameBuilder {
 /// Reconstructs both frames: frame 1 (the reference) and frame 2 (consumed), `options` as
 /// JSON [`RunOptions`]. `progress(stage, fraction)`, when given, is called as stages start and
 /// finish (fraction in [0, 1] within the stage). Throws an `Error` named after the problem
-/// (module docs) with a readable message. The fusion's members are made here, one after the
-/// other; [`reconstruct_unfused`] leaves them to other workers ([`super::members`]).
+/// (module docs) with a readable message. The flow and the fusion's members are computed here,
+/// one after the other; [`reconstruct_unfused`] leaves them to other workers.
 #[wasm_bindgen]
 pub fn reconstruct(
     frame1: FrameBuilder,
@@ -231,81 +232,122 @@ pub fn reconstruct(
     options: &str,
     progress: Option<Function>,
 ) -> Result<PageReconstruction, JsValue> {
-    let mut result =
-        reconstruct_unfused(frame1, frame2, options, progress.clone(), None, None, None)?;
-    crate::pipeline::fuse(&mut result.rec, &mut progress_callback(progress));
+    let options = parse_options(options)?;
+    let (pair, photo_size) = prepared_pair(frame1, frame2, &options)?;
+    let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
+    let mut report = progress_callback(progress);
+    let rec = crate::pipeline::reconstruct(&pair, flow, &options.params, &mut report)
+        .map_err(js_error)?;
+    let mut result = PageReconstruction::unfused(rec, photo_size);
     result.finish();
     Ok(result)
 }
 
-/// [`reconstruct`] without the fusion: the result is not finished until the members' votes
-/// are given to it and it is fused ([`super::members`]: `memberInputs`, `addVote`,
-/// `addFailure`, `fuse`); until then its clouds, pictures and files are those before the
-/// fusion. `forward` and `backward`, when given, are the first flow's two directions
-/// ([`flow_direction`] of the same frames and options, as `u, v` pairs row by row; both or
-/// neither): the flow stage then only joins them, and the report's flow time counts
-/// `directions_ms`, the milliseconds they took.
+/// [`reconstruct`] without the fusion, its flows' directions computed elsewhere where
+/// `directions` gives them: the result is not finished until the members' votes are given to
+/// it and it is fused ([`super::members`]: `memberInputs`, `addVote`, `addFailure`, `fuse`);
+/// until then its clouds, pictures and files are those before the fusion. Resolves to the
+/// result; rejects as `reconstruct` throws.
+///
+/// `directions(preset)`, when given, is asked for each flow the run computes (its preset's
+/// name: the first pass's, and a finer one's where a pass asks for one) and returns a promise
+/// of `{ forward, backward, ms }`, the flow's two directions as [`flow_direction`] gives them
+/// (frame 1 → 2 and 2 → 1 of these frames and these options with that preset, `u, v` pairs
+/// row by row at the working size) and, where they were computed before this run, the
+/// milliseconds that took (added to the report's flow time), or of `null`: then they are
+/// computed here. The page's
+/// worker computes one direction in a helper worker while it computes the other, or gives
+/// directions it holds (www/worker.js); the result is the same bits. A `directions` that
+/// throws or rejects counts as `null`. While the promise is pending, the worker may call into
+/// this module (to compute its direction).
 #[wasm_bindgen(js_name = reconstructUnfused)]
-pub fn reconstruct_unfused(
+pub async fn reconstruct_unfused(
     frame1: FrameBuilder,
     frame2: FrameBuilder,
-    options: &str,
+    options: String,
     progress: Option<Function>,
-    forward: Option<Vec<f32>>,
-    backward: Option<Vec<f32>>,
-    directions_ms: Option<f64>,
+    directions: Option<Function>,
 ) -> Result<PageReconstruction, JsValue> {
-    let options = parse_options(options)?;
+    let options = parse_options(&options)?;
     let (pair, photo_size) = prepared_pair(frame1, frame2, &options)?;
-    let params = FlowParams::preset(options.flow_preset);
-    let flow = match (forward, backward) {
-        (None, None) => FlowInput::Compute(params),
-        (Some(forward), Some(backward)) => {
-            let (w, h) = pair.frame1.size();
-            let field = |data: Vec<f32>| {
-                if data.len() != 2 * w * h {
-                    return Err(js_error(Error::InvalidParameter(format!(
-                        "a flow direction of {} numbers for {w}×{h} frames",
-                        data.len()
-                    ))));
-                }
-                super::members::grid(w, h, data, |v| [v[0], v[1]], 2).map_err(js_error)
-            };
-            FlowInput::Computed {
-                params,
-                forward: field(forward)?,
-                backward: field(backward)?,
-            }
-        }
-        _ => {
-            return Err(js_error(Error::InvalidParameter(
-                "give both flow directions or neither".into(),
-            )));
-        }
-    };
-    let given = matches!(flow, FlowInput::Computed { .. });
+    let flow = FlowInput::Compute(FlowParams::preset(options.flow_preset));
     let mut report = progress_callback(progress);
-    let mut rec = crate::pipeline::reconstruct_unfused(&pair, flow, &options.params, &mut report)
-        .map_err(js_error)?;
+    let mut source = PageDirections {
+        request: directions,
+        size: pair.frame1.size(),
+        earlier_ms: 0.0,
+    };
+    let mut rec = crate::pipeline::reconstruct_unfused_from(
+        &pair,
+        flow,
+        &options.params,
+        &mut source,
+        &mut report,
+    )
+    .await
+    .map_err(js_error)?;
     let timings = &mut rec.report.timings_ms;
-    if let (true, Some(ms), Some((_, flow_ms))) = (
-        given,
-        directions_ms,
-        timings.iter_mut().find(|(stage, _)| *stage == Stage::Flow),
-    ) {
-        *flow_ms += ms;
+    if let Some((_, flow_ms)) = timings.iter_mut().find(|(stage, _)| *stage == Stage::Flow) {
+        *flow_ms += source.earlier_ms;
     }
-    Ok(PageReconstruction {
-        rec,
-        ground_truth: GroundTruthScores::default(),
-        photo_size,
-        votes: Some(Vec::new()),
-    })
+    Ok(PageReconstruction::unfused(rec, photo_size))
 }
 
-/// One direction of the first flow [`reconstruct_unfused`] computes for these frames and
-/// options (frame 1 → 2, or 2 → 1 when `backward`), as `u, v` pairs row by row at the working
-/// size: the page's worker computes one while a helper computes the other, and gives both to
+/// The flows' directions as the page's worker gives them ([`reconstruct_unfused`]'s
+/// `directions`).
+struct PageDirections {
+    /// `directions(preset)`, a JavaScript function returning a promise.
+    request: Option<Function>,
+    /// The working size, which the directions must have.
+    size: (usize, usize),
+    /// The milliseconds that the directions given computed before this run took (their `ms`).
+    earlier_ms: f64,
+}
+
+impl Directions for PageDirections {
+    async fn directions(
+        &mut self,
+        params: &FlowParams,
+    ) -> crate::Result<Option<(FlowField, FlowField)>> {
+        let (Some(request), Some(preset)) = (&self.request, params.named_preset()) else {
+            return Ok(None);
+        };
+        let Ok(promise) = request.call1(&JsValue::NULL, &JsValue::from_str(preset.name())) else {
+            return Ok(None);
+        };
+        let Ok(given) = JsFuture::from(js_sys::Promise::resolve(&promise)).await else {
+            return Ok(None);
+        };
+        if given.is_null() || given.is_undefined() {
+            return Ok(None);
+        }
+        let (w, h) = self.size;
+        let field = |key: &str| {
+            let data = (js_sys::Reflect::get(&given, &JsValue::from_str(key)).ok())
+                .and_then(|v| v.dyn_into::<js_sys::Float32Array>().ok())
+                .map(|a| a.to_vec())
+                .ok_or_else(|| {
+                    Error::InvalidParameter(format!("the given flow has no {key} direction"))
+                })?;
+            if data.len() != 2 * w * h {
+                return Err(Error::InvalidParameter(format!(
+                    "a flow direction of {} numbers for {w}×{h} frames",
+                    data.len()
+                )));
+            }
+            super::members::grid(w, h, data, |v| [v[0], v[1]], 2)
+        };
+        let directions = (field("forward")?, field("backward")?);
+        let ms = js_sys::Reflect::get(&given, &JsValue::from_str("ms")).ok();
+        self.earlier_ms += ms.and_then(|ms| ms.as_f64()).unwrap_or(0.0);
+        Ok(Some(directions))
+    }
+}
+
+/// One direction of the flow [`reconstruct_unfused`] computes first for these frames and
+/// options (frame 1 → 2, or 2 → 1 when `backward`; a finer pass's flow with the options' flow
+/// preset set to its preset), as `u, v` pairs row by row at the working size: the page's
+/// worker computes one while a helper computes the other, and gives both to
 /// `reconstructUnfused` (the same result bit for bit). `progress(fraction)`, when given, is
 /// called as the work goes. Throws as `reconstructUnfused` does.
 #[wasm_bindgen(js_name = flowDirection)]
@@ -422,6 +464,17 @@ pub struct PageReconstruction {
 }
 
 impl PageReconstruction {
+    /// A reconstruction not fused yet (its votes to come), from photos of `photo_size` where
+    /// the page decoded them smaller.
+    fn unfused(rec: Reconstruction, photo_size: Option<(usize, usize)>) -> Self {
+        PageReconstruction {
+            rec,
+            ground_truth: GroundTruthScores::default(),
+            photo_size,
+            votes: Some(Vec::new()),
+        }
+    }
+
     /// After the fusion: the outputs at the input size (depth files, flow.flo, the ground-truth
     /// scores) are at the photo's size, as if the library had downscaled it; the depth at that
     /// size is made when asked for (a 12-megapixel depth map is 48 MB of wasm memory the run
