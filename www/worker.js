@@ -170,10 +170,10 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   const [width, height] = [frames[0].width, frames[0].height];
   const wanted = threadsFor(options, quiet, width, height) - 1;
   // With helpers, each flow's two directions are computed at once (directionsApart), from the
-  // frames' pixels read whole here (at the working size) and held through the run, for the
-  // passes that ask for finer flow; else the frames go to wasm in strips, never whole in
+  // frames' pixels read whole here (at the working size) and held until the passes are made,
+  // for those that ask for finer flow; else the frames go to wasm in strips, never whole in
   // JavaScript.
-  const pixels = wanted > 0 ? frames.map(pixelsOf) : null;
+  let pixels = wanted > 0 ? frames.map(pixelsOf) : null;
   const [one, two] = pixels === null ? frames.map(readFrame) : [null, null];
   const pixelsMs = performance.now() - clock;
   let last = { stage: '', fraction: -1 };
@@ -223,6 +223,7 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
     }
     const [a, b] = pixels === null ? [one, two] : pixels.map(builderOf);
     made = await untilAborted(soup.reconstructUnfused(a, b, json, progress, directions));
+    pixels = null; // no more flows to compute
     await fuseMembers(made, json, helpers, progress);
   } catch (e) {
     if (!describe(e).fatal) {

@@ -322,20 +322,22 @@ impl Directions for PageDirections {
             return Ok(None);
         }
         let (w, h) = self.size;
+        // Copied straight into the field (one allocation, not a list of numbers then a field).
         let field = |key: &str| {
-            let data = (js_sys::Reflect::get(&given, &JsValue::from_str(key)).ok())
+            let array = (js_sys::Reflect::get(&given, &JsValue::from_str(key)).ok())
                 .and_then(|v| v.dyn_into::<js_sys::Float32Array>().ok())
-                .map(|a| a.to_vec())
                 .ok_or_else(|| {
                     Error::InvalidParameter(format!("the given flow has no {key} direction"))
                 })?;
-            if data.len() != 2 * w * h {
+            if array.length() as usize != 2 * w * h {
                 return Err(Error::InvalidParameter(format!(
                     "a flow direction of {} numbers for {w}×{h} frames",
-                    data.len()
+                    array.length()
                 )));
             }
-            super::members::grid(w, h, data, |v| [v[0], v[1]], 2)
+            let mut vectors = vec![[0.0f32; 2]; w * h];
+            array.copy_to(vectors.as_flattened_mut());
+            FlowField::from_vec(w, h, vectors)
         };
         let directions = (field("forward")?, field("backward")?);
         let ms = js_sys::Reflect::get(&given, &JsValue::from_str("ms")).ok();
