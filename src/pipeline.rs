@@ -202,10 +202,12 @@ pub enum FlowInput {
 /// holds already (`src/web/reconstruct.rs`). The pipeline joins them with the forward–backward
 /// check ([`crate::flow::pair_from_directions`]), so the flow is the same bits either way.
 pub(crate) trait Directions {
-    /// The two directions of the flow with `params` between the frames, or `None`.
+    /// The two directions of the flow with `params` between the frames, or `None`. Where they
+    /// are computed for the asking, their progress is `span`'s.
     fn directions(
         &mut self,
         params: &FlowParams,
+        span: ProgressSpan,
     ) -> impl Future<Output = Result<Option<(FlowField, FlowField)>>>;
 }
 
@@ -213,8 +215,28 @@ pub(crate) trait Directions {
 pub(crate) struct ComputedHere;
 
 impl Directions for ComputedHere {
-    async fn directions(&mut self, _params: &FlowParams) -> Result<Option<(FlowField, FlowField)>> {
+    async fn directions(
+        &mut self,
+        _params: &FlowParams,
+        _span: ProgressSpan,
+    ) -> Result<Option<(FlowField, FlowField)>> {
         Ok(None)
+    }
+}
+
+/// Where a flow's progress goes: `stage`'s fraction goes from `from` to `from + span` as the
+/// flow's own share done goes from 0 to 1.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct ProgressSpan {
+    pub stage: Stage,
+    pub from: f32,
+    pub span: f32,
+}
+
+impl ProgressSpan {
+    /// The stage's fraction when the flow's share `done` (in [0, 1]) is done.
+    pub fn at(self, done: f32) -> f32 {
+        self.from + self.span * done
     }
 }
 
@@ -229,7 +251,7 @@ fn without_waiting<T>(future: impl Future<Output = Result<T>>) -> Result<T> {
     {
         Poll::Ready(result) => result,
         Poll::Pending => Err(Error::InvalidParameter(
-            "a flow source waited where none may".into(),
+            "a flow source waited where none may (a bug)".into(),
         )),
     }
 }
@@ -723,9 +745,17 @@ impl SetAside {
             forward: flow,
             reliable,
             ..
-        } = flow_of(pair, &used, directions, &mut |f| {
-            progress(Stage::Outputs, RESTORED_FLOW_SHARE * f)
-        })
+        } = flow_of(
+            pair,
+            &used,
+            directions,
+            ProgressSpan {
+                stage: Stage::Outputs,
+                from: 0.0,
+                span: RESTORED_FLOW_SHARE,
+            },
+            progress,
+        )
         .await?;
         clock.lap(Stage::Flow);
         let k = report.camera.intrinsics;
@@ -873,7 +903,7 @@ async fn reconstruct_from(
                 directions,
                 params.min_reliable_flow,
                 &mut notes,
-                &mut |f| progress(Stage::Flow, f),
+                progress,
             )
             .await?;
             (computed.forward, computed.reliable, Some(used))
@@ -1322,8 +1352,9 @@ where
 /// the most trusted pixels is kept, with the parameters it used. Each new pass adds a note, and
 /// so does keeping an earlier pass than the last.
 ///
-/// `progress` gets the share of the work done in [0, 1]. A pass that may be followed by a finer
-/// one gets the share of what is left that its preset's cost has beside the finer one's
+/// `progress` hears of it as [`Stage::Flow`], the share of the work done in [0, 1]. A pass that
+/// may be followed by a finer one gets the share of what is left that its preset's cost has
+/// beside the finer one's
 /// ([`Preset::relative_cost`]); the last possible pass (every pass when `min_reliable` is 0)
 /// gets all that is left.
 async fn trusted_flow(
@@ -1332,7 +1363,7 @@ async fn trusted_flow(
     directions: &mut impl Directions,
     min_reliable: f64,
     notes: &mut Vec<String>,
-    progress: &mut dyn FnMut(f32),
+    progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<(FlowPair, FlowParams)> {
     let mut start = 0.0f32;
     let (mut trusted, mut best) = spanned_flow(
@@ -1369,41 +1400,46 @@ async fn trusted_flow(
             preset_name(&used),
         ));
     }
-    progress(1.0);
+    progress(Stage::Flow, 1.0);
     Ok((best, best_params))
 }
 
 /// The flow with `params` of one of [`trusted_flow`]'s passes ([`flow_of`]) and its share of
-/// trusted pixels. Its progress goes to `progress` from `start`, over its share of what is left
-/// (see [`trusted_flow`]), and `start` moves past it.
+/// trusted pixels. Its progress goes to `progress` as [`Stage::Flow`] from `start`, over its
+/// share of what is left (see [`trusted_flow`]), and `start` moves past it.
 async fn spanned_flow(
     pair: &FramePair,
     params: &FlowParams,
     directions: &mut impl Directions,
     min_reliable: f64,
     start: &mut f32,
-    progress: &mut dyn FnMut(f32),
+    progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<(f64, FlowPair)> {
     let cost = |p: &FlowParams| p.named_preset().map_or(1.0, Preset::relative_cost);
     let next = params.finer().filter(|_| min_reliable > 0.0);
     let share = next.map_or(1.0, |f| cost(params) / (cost(params) + cost(&f)));
-    let (from, span) = (*start, share * (1.0 - *start));
-    let computed = flow_of(pair, params, directions, &mut |f| progress(from + span * f)).await?;
-    *start += span;
+    let span = ProgressSpan {
+        stage: Stage::Flow,
+        from: *start,
+        span: share * (1.0 - *start),
+    };
+    let computed = flow_of(pair, params, directions, span, progress).await?;
+    *start += span.span;
     Ok((trusted_share(&computed.reliable), computed))
 }
 
 /// The flow with `params` between the pair's frames, as [`compute_flow`] gives it: from the
 /// two directions `directions` gives (checked to be of the frames' size), else computed
-/// ([`flow_both_ways`]). `progress` gets the share done in [0, 1].
+/// ([`flow_both_ways`]). Its progress goes to `progress` over `span`.
 async fn flow_of(
     pair: &FramePair,
     params: &FlowParams,
     directions: &mut impl Directions,
-    progress: &mut dyn FnMut(f32),
+    span: ProgressSpan,
+    progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<FlowPair> {
-    let Some((forward, backward)) = directions.directions(params).await? else {
-        return flow_both_ways(pair, params, progress);
+    let Some((forward, backward)) = directions.directions(params, span).await? else {
+        return flow_both_ways(pair, params, &mut |f| progress(span.stage, span.at(f)));
     };
     let (w, h) = pair.frame1.size();
     for given in [&forward, &backward] {
@@ -1416,7 +1452,7 @@ async fn flow_of(
         }
     }
     let flow = crate::flow::pair_from_directions(forward, backward, params)?;
-    progress(1.0);
+    progress(span.stage, span.at(1.0));
     Ok(flow)
 }
 

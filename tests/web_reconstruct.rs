@@ -385,17 +385,22 @@ fn frames_decoded_smaller_keep_the_photos_size_for_outputs_and_checks() {
 }
 
 /// A `directions` function for `reconstructUnfused` (www/worker.js's way) that records the
-/// presets it is asked for in `asked` and answers each with `answer(preset)`.
+/// presets it is asked for in `asked` and answers each with `answer(preset)`. Each flow's
+/// progress must span a part of the flow stage.
 fn directions(
     asked: &Rc<RefCell<Vec<String>>>,
     mut answer: impl FnMut(&str) -> JsValue + 'static,
 ) -> Function {
     let asked = asked.clone();
-    let request = Closure::<dyn FnMut(String) -> js_sys::Promise>::new(move |preset: String| {
-        let value = answer(&preset);
-        asked.borrow_mut().push(preset);
-        js_sys::Promise::resolve(&value)
-    });
+    let request = Closure::<dyn FnMut(String, String, f64, f64) -> js_sys::Promise>::new(
+        move |preset: String, stage: String, from: f64, to: f64| {
+            assert_eq!(stage, "flow");
+            assert!(0.0 <= from && from < to && to <= 1.0, "{from}..{to}");
+            let value = answer(&preset);
+            asked.borrow_mut().push(preset);
+            js_sys::Promise::resolve(&value)
+        },
+    );
     request.into_js_value().unchecked_into()
 }
 
@@ -460,7 +465,7 @@ async fn flow_directions_given_apart_fit_the_frames_and_give_the_same_result() {
     // the second asking for preset high's flow).
     let mut computed = unfused(JsValue::NULL).await.unwrap();
     assert_eq!(*asked.borrow(), ["fine", "fine", "fine", "high"]);
-    // The finer pass's flow given apart too: the same files as the one-call reconstruct.
+    // The finer pass's flow given apart too: the same files as with the directions computed here.
     asked.borrow_mut().clear();
     let request = directions(
         &asked,

@@ -15,10 +15,11 @@
 // the run's inputs) while this worker makes the rest (`memberVote`), and this worker fuses the
 // votes (src/web/members.rs). Before that, while this worker computes a flow from frame 1 to
 // frame 2, the first helper computes it from frame 2 to frame 1 (`directionsApart`: each
-// direction is half the flow's time): the run's first flow, and a finer one where a pass asks for
-// it (`reconstructUnfused` asks for each flow's directions, src/web/reconstruct.rs). The result
-// is the same, bit for bit, however many make them. A helper that cannot start or crashes leaves its work to this worker. `worker.js?threads=1`
-// (the page's `?threads=1`) makes every member here, one after the other.
+// direction is half the flow's time): the run's first flow, and a finer one where a pass asks
+// for it (`reconstructUnfused` asks for each flow's directions, src/web/reconstruct.rs). The
+// result is the same, bit for bit, however many make them. A helper that cannot start or
+// crashes leaves its work to this worker. `worker.js?threads=1` (the page's `?threads=1`) makes
+// every member here, one after the other.
 //
 // Requests (each with an `id`; answered by { type: 'reply', id, ... } or { type: 'error', id, ... }):
 //   { type: 'exif', bytes: ArrayBuffer }                   → { exif: { focal35mm, warning } }
@@ -201,28 +202,49 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   // which asks with the flow's preset): the first flow's as this run was handed them or
   // computed them (a pass kept after a finer one asks for them again), else computed apart with
   // the first helper, else null (computed in wasm, one after the other).
-  const directions = async (preset) => {
+  // Where they are computed, their progress is that of `stage` from `from` to `to`. A wasm
+  // abort while computing them ends the run (`crash`): the instance is unusable, so the pass
+  // waiting for them must not go on.
+  let crash;
+  const crashed = new Promise((_, reject) => {
+    crash = reject;
+  });
+  crashed.catch(() => {}); // raced below, or never settled
+  const directions = async (preset, stage = 'flow', from = 0, to = 1) => {
     const known = [given, firstFlow].find((flow) => flow?.preset === preset);
-    if (known === undefined && helpers.length > 0) {
+    if (known !== undefined) {
+      const ms = uncountedMs;
+      uncountedMs = 0;
+      return { forward: known.forward, backward: known.backward, ms };
+    }
+    if (helpers.length === 0) {
+      return null;
+    }
+    try {
       const asked = JSON.stringify({ ...options, flowPreset: preset });
-      const flow = await directionsApart(pixels, asked, helpers, progress);
+      const flow = await directionsApart(pixels, asked, helpers, (f) => progress?.(stage, from + (to - from) * f));
       firstFlow ??= { ...flow, preset };
       return flow;
+    } catch (e) {
+      if (describe(e).fatal) {
+        crash(e);
+        return new Promise(() => {});
+      }
+      return null; // computed in wasm, which says what is wrong
     }
-    const ms = uncountedMs;
-    uncountedMs = 0;
-    return known === undefined ? null : { forward: known.forward, backward: known.backward, ms };
   };
   try {
     if (given === null && helpers.length > 0) {
       // The first flow before the pass holds the frames in wasm: the flow's peak holds only its own.
       const computing = performance.now();
-      await directions(firstPreset);
-      firstFlow.ms = performance.now() - computing;
-      uncountedMs = firstFlow.ms;
+      await Promise.race([directions(firstPreset), crashed]);
+      if (firstFlow !== null) {
+        firstFlow.ms = performance.now() - computing;
+        uncountedMs = firstFlow.ms;
+      }
     }
     const [a, b] = pixels === null ? [one, two] : pixels.map(builderOf);
-    made = await untilAborted(soup.reconstructUnfused(a, b, json, progress, directions));
+    made = await untilAborted(soup.reconstructUnfused(a, b, json, progress, directions), crashed);
     pixels = null; // no more flows to compute
     await fuseMembers(made, json, helpers, progress);
   } catch (e) {
@@ -274,20 +296,24 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
  * `promise` (of an async wasm export), or rejected with the error of an abort of the wasm
  * instance (out of memory, or a bug) while it is pending: the export's work runs in tasks of
  * wasm-bindgen's, from which an abort escapes as an uncaught error (handled here, so that the
- * page hears of it as the run's error) and leaves the promise pending.
+ * page hears of it as the run's error) and leaves the promise pending; or rejected as
+ * `crashed` is (an abort the export's callbacks caught).
  */
-function untilAborted(promise) {
+function untilAborted(promise, crashed) {
   let listener;
   const aborted = new Promise((_, reject) => {
     listener = (event) => {
-      event.preventDefault();
-      reject(event.error ?? event.reason ?? new Error(event.message));
+      const error = event.error ?? event.reason ?? new Error(event.message);
+      if (describe(error).fatal) {
+        event.preventDefault();
+        reject(error);
+      }
     };
   });
   for (const type of ['error', 'unhandledrejection']) {
     self.addEventListener(type, listener);
   }
-  return Promise.race([promise, aborted]).finally(() => {
+  return Promise.race([promise, aborted, crashed]).finally(() => {
     for (const type of ['error', 'unhandledrejection']) {
       self.removeEventListener(type, listener);
     }
@@ -297,11 +323,11 @@ function untilAborted(promise) {
 /**
  * A flow's two directions (src/web/reconstruct.rs, `flowDirection`, with the options `json`) at
  * once: frame 2 → 1 in the first of `helpers`, 1 → 2 here, from RGBA `pixels` of both frames
- * (the helper gets copies). Resolves to { forward, backward } (Float32Arrays) and `apart`,
- * whether the helper computed one: a helper that fails is left out of the run (terminated), and
- * its direction is computed here after the other.
+ * (the helper gets copies); `report(fraction)` hears of the share done. Resolves to { forward,
+ * backward } (Float32Arrays) and `apart`, whether the helper computed one: a helper that fails
+ * is left out of the run (terminated), and its direction is computed here after the other.
  */
-async function directionsApart(pixels, json, helpers, progress) {
+async function directionsApart(pixels, json, helpers, report) {
   const helper = helpers[0];
   const copies = pixels.map(({ width, height, data }) => ({ width, height, data: data.slice() }));
   const asked = new Promise((resolve) => {
@@ -314,13 +340,13 @@ async function directionsApart(pixels, json, helpers, progress) {
   });
   helper.postMessage({ type: 'backward-flow', id: 0, frames: copies, options: json }, copies.map((c) => c.data.buffer));
   const [a, b] = pixels.map(builderOf);
-  const forward = soup.flowDirection(a, b, json, false, (f) => progress?.('flow', 0.5 * f));
+  const forward = soup.flowDirection(a, b, json, false, (f) => report(0.5 * f));
   let backward = await asked;
   const apart = backward !== null;
   if (!apart) {
     helpers.shift().terminate(); // its members are made by the others
     const [c, d] = pixels.map(builderOf);
-    backward = soup.flowDirection(c, d, json, true, (f) => progress?.('flow', 0.5 + 0.5 * f));
+    backward = soup.flowDirection(c, d, json, true, (f) => report(0.5 + 0.5 * f));
   }
   return { forward, backward, apart };
 }
@@ -358,7 +384,9 @@ function threadsFor(options, quiet, width, height) {
  * computes a flow direction before its members, which grows its wasm memory by the flow's
  * working memory (at 1024 × 768 with preset fine both directions hold 58 MiB at their peak);
  * with it the tab stayed at 346–350 MiB during a 12 MP run, below the peak after the run
- * (docs/RESULTS.md, stop 59).
+ * (docs/RESULTS.md, stop 59). Where a pass asks for finer flow it computes a direction of
+ * preset high's too, whose peak is fine's (63 bytes per pixel each); no photo pair measured
+ * takes such a pass at 12 MP (docs/RESULTS.md, stop 60).
  */
 const HELPER_MIB = 8;
 const HELPER_BYTES_PER_PIXEL = 50;

@@ -5,7 +5,7 @@
 //! options, so other workers can make them at the same time:
 //!
 //! ```js
-//! const result = reconstructUnfused(one, two, optionsJson, progress); // the kept pass
+//! const result = await reconstructUnfused(one, two, optionsJson, progress, directions); // the kept pass
 //! const counts = result.memberCounts();        // the members' superpixel counts
 //! const inputs = result.memberInputs();        // frame, flow, reliable, intrinsics
 //! // in each helper worker, for some of the counts:

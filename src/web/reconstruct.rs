@@ -40,7 +40,7 @@ use crate::formats::ply::Encoding;
 use crate::image::{ExifInfo, Frame, LoadedImage, frame_from_rgba, read_exif_info, resize};
 use crate::input::{DEFAULT_MAX_SIDE, FramePair, MIN_SIDE, prepare_pair};
 use crate::output::{cloud_labels, confidence_picture, dense_depth, depth_at, point_clouds};
-use crate::pipeline::{Directions, FlowInput, Params, Reconstruction, Stage};
+use crate::pipeline::{Directions, FlowInput, Params, ProgressSpan, Reconstruction, Stage};
 use crate::superpixels::view::boundary_overlay;
 
 /// What the page asks for besides the pixels, as JSON with camelCase keys (`params` keeps the
@@ -249,17 +249,18 @@ pub fn reconstruct(
 /// until then its clouds, pictures and files are those before the fusion. Resolves to the
 /// result; rejects as `reconstruct` throws.
 ///
-/// `directions(preset)`, when given, is asked for each flow the run computes (its preset's
-/// name: the first pass's, and a finer one's where a pass asks for one) and returns a promise
-/// of `{ forward, backward, ms }`, the flow's two directions as [`flow_direction`] gives them
-/// (frame 1 → 2 and 2 → 1 of these frames and these options with that preset, `u, v` pairs
-/// row by row at the working size) and, where they were computed before this run, the
-/// milliseconds that took (added to the report's flow time), or of `null`: then they are
-/// computed here. The page's
-/// worker computes one direction in a helper worker while it computes the other, or gives
-/// directions it holds (www/worker.js); the result is the same bits. A `directions` that
-/// throws or rejects counts as `null`. While the promise is pending, the worker may call into
-/// this module (to compute its direction).
+/// `directions(preset, stage, from, to)`, when given, is asked for each flow the run computes
+/// (its preset's name: the first pass's, and a finer one's where a pass asks for one; where it
+/// computes them, their progress is `progress(stage, fraction)` with the fraction going from
+/// `from` to `to`) and returns a promise of `{ forward, backward, ms }`, the flow's two
+/// directions as [`flow_direction`] gives them (frame 1 → 2 and 2 → 1 of these frames and these
+/// options with that preset, `u, v` pairs row by row at the working size) and, where they were
+/// computed before this run, the milliseconds that took (added to the report's flow time), or
+/// of `null`: then they are computed here. The page's worker computes one direction in a helper
+/// worker while it computes the other, or gives directions it holds (www/worker.js); the result
+/// is the same bits. A `directions` that throws or rejects counts as `null`. It may call into
+/// this module, before it returns (the worker computes its direction then) and while its
+/// promise is pending: no object of the module is borrowed across the call.
 #[wasm_bindgen(js_name = reconstructUnfused)]
 pub async fn reconstruct_unfused(
     frame1: FrameBuilder,
@@ -296,7 +297,7 @@ pub async fn reconstruct_unfused(
 /// The flows' directions as the page's worker gives them ([`reconstruct_unfused`]'s
 /// `directions`).
 struct PageDirections {
-    /// `directions(preset)`, a JavaScript function returning a promise.
+    /// `directions(preset, stage, from, to)`, a JavaScript function returning a promise.
     request: Option<Function>,
     /// The working size, which the directions must have.
     size: (usize, usize),
@@ -308,11 +309,17 @@ impl Directions for PageDirections {
     async fn directions(
         &mut self,
         params: &FlowParams,
+        span: ProgressSpan,
     ) -> crate::Result<Option<(FlowField, FlowField)>> {
         let (Some(request), Some(preset)) = (&self.request, params.named_preset()) else {
             return Ok(None);
         };
-        let Ok(promise) = request.call1(&JsValue::NULL, &JsValue::from_str(preset.name())) else {
+        let arguments = js_sys::Array::new();
+        arguments.push(&JsValue::from_str(preset.name()));
+        arguments.push(&JsValue::from_str(span.stage.name()));
+        arguments.push(&JsValue::from_f64(span.at(0.0).into()));
+        arguments.push(&JsValue::from_f64(span.at(1.0).into()));
+        let Ok(promise) = request.apply(&JsValue::NULL, &arguments) else {
             return Ok(None);
         };
         let Ok(given) = JsFuture::from(js_sys::Promise::resolve(&promise)).await else {
