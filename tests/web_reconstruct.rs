@@ -385,8 +385,9 @@ fn frames_decoded_smaller_keep_the_photos_size_for_outputs_and_checks() {
 }
 
 /// A `directions` function for `reconstructUnfused` (www/worker.js's way) that records the
-/// presets it is asked for in `asked` and answers each with `answer(preset)`. Each flow's
-/// progress must span a part of the flow stage.
+/// presets it is asked for in `asked` (with the stage their progress goes to where it is not
+/// the flow's) and answers each with `answer(preset)`. Each flow's progress must span a part of
+/// its stage.
 fn directions(
     asked: &Rc<RefCell<Vec<String>>>,
     mut answer: impl FnMut(&str) -> JsValue + 'static,
@@ -394,10 +395,13 @@ fn directions(
     let asked = asked.clone();
     let request = Closure::<dyn FnMut(String, String, f64, f64) -> js_sys::Promise>::new(
         move |preset: String, stage: String, from: f64, to: f64| {
-            assert_eq!(stage, "flow");
             assert!(0.0 <= from && from < to && to <= 1.0, "{from}..{to}");
             let value = answer(&preset);
-            asked.borrow_mut().push(preset);
+            let asked_for = match stage.as_str() {
+                "flow" => preset,
+                _ => format!("{preset} ({stage})"),
+            };
+            asked.borrow_mut().push(asked_for);
             js_sys::Promise::resolve(&value)
         },
     );
@@ -484,6 +488,41 @@ async fn flow_directions_given_apart_fit_the_frames_and_give_the_same_result() {
     for file in ["depth.pfm", "flow.flo", "frame1.ply"] {
         let here = computed.export_file(file).unwrap();
         assert_eq!(apart.export_file(file).unwrap(), here, "{file}");
+    }
+}
+
+#[wasm_bindgen_test]
+async fn a_pass_kept_after_a_finer_one_is_given_its_flow_again() {
+    // The table at 64 × 48 with its own intrinsics: preset fine's pass finds no ground, preset
+    // high's pins no more, and fine's pass is kept: its flow is asked for again, within the
+    // outputs stage (the worker gives the directions it holds), and the files are those with
+    // every flow computed here.
+    let s = render(SceneKind::Table, 64, 48).unwrap();
+    let k = serde_json::to_string(&s.intrinsics).unwrap();
+    let options = options(&format!(r#"{{"intrinsics": {k}}}"#));
+    let unfused = |directions| {
+        reconstruct_unfused(
+            builder(&s.frame1),
+            builder(&s.frame2),
+            options.clone(),
+            None,
+            directions,
+        )
+    };
+    let asked = Rc::new(RefCell::new(Vec::new()));
+    let answer = computed_directions(&s.frame1, &s.frame2, &options, 0.0);
+    let mut apart = unfused(Some(directions(&asked, answer))).await.unwrap();
+    assert_eq!(*asked.borrow(), ["fine", "high", "fine (outputs)"]);
+    let report: serde_json::Value = serde_json::from_str(&apart.report().unwrap()).unwrap();
+    let notes = report["notes"].to_string();
+    assert!(
+        notes.contains("kept the reconstruction from preset fine"),
+        "{notes}"
+    );
+    let mut here = unfused(None).await.unwrap();
+    for file in ["depth.pfm", "flow.flo", "frame1.ply"] {
+        let computed = here.export_file(file).unwrap();
+        assert_eq!(apart.export_file(file).unwrap(), computed, "{file}");
     }
 }
 
