@@ -58,6 +58,17 @@ fn run(one: &Frame, two: &Frame, options: &str) -> Result<PageReconstruction, Js
     reconstruct(builder(one), builder(two), options, None)
 }
 
+/// Asserts that `a` and `b` export the same bytes for each of `files`.
+fn assert_same_files(a: &mut PageReconstruction, b: &mut PageReconstruction, files: &[&str]) {
+    for &file in files {
+        assert_eq!(
+            a.export_file(file).unwrap(),
+            b.export_file(file).unwrap(),
+            "{file}"
+        );
+    }
+}
+
 /// The `name` and `message` of a thrown error.
 fn name_and_message(error: JsValue) -> (String, String) {
     let error = js_sys::Error::from(error);
@@ -485,10 +496,11 @@ async fn flow_directions_given_apart_fit_the_frames_and_give_the_same_result() {
     .await
     .unwrap();
     assert_eq!(*asked.borrow(), ["fine", "high"]);
-    for file in ["depth.pfm", "flow.flo", "frame1.ply"] {
-        let here = computed.export_file(file).unwrap();
-        assert_eq!(apart.export_file(file).unwrap(), here, "{file}");
-    }
+    assert_same_files(
+        &mut apart,
+        &mut computed,
+        &["depth.pfm", "flow.flo", "frame1.ply"],
+    );
 }
 
 #[wasm_bindgen_test]
@@ -520,10 +532,11 @@ async fn a_pass_kept_after_a_finer_one_is_given_its_flow_again() {
         "{notes}"
     );
     let mut here = unfused(None).await.unwrap();
-    for file in ["depth.pfm", "flow.flo", "frame1.ply"] {
-        let computed = here.export_file(file).unwrap();
-        assert_eq!(apart.export_file(file).unwrap(), computed, "{file}");
-    }
+    assert_same_files(
+        &mut apart,
+        &mut here,
+        &["depth.pfm", "flow.flo", "frame1.ply"],
+    );
 }
 
 #[wasm_bindgen_test]
@@ -597,13 +610,8 @@ async fn members_made_in_other_workers_fuse_to_the_same_result() {
         "InvalidParameterError"
     );
     parts.fuse(12.0).unwrap();
-    for file in ["depth.pfm", "frame1.ply", "frame2.ply", "flow.flo"] {
-        assert_eq!(
-            parts.export_file(file).unwrap(),
-            whole.export_file(file).unwrap(),
-            "{file}"
-        );
-    }
+    let files = ["depth.pfm", "frame1.ply", "frame2.ply", "flow.flo"];
+    assert_same_files(&mut parts, &mut whole, &files);
     let report = |r: &PageReconstruction| -> serde_json::Value {
         serde_json::from_str(&r.report().unwrap()).unwrap()
     };
