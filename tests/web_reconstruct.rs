@@ -640,4 +640,11 @@ async fn members_made_in_other_workers_fuse_to_the_same_result() {
     let (name, message) = name_and_message(source(&flow[2..]).err().unwrap());
     assert_eq!(name, "InvalidParameterError");
     assert!(message.contains("flow"), "{message}");
+    // So do options with a parameter out of its range, as the run's would.
+    let mut bad: serde_json::Value = serde_json::from_str(&options).unwrap();
+    bad["params"]["refine"]["expansion_factors"] = serde_json::json!([0.5, 0.4, 0.6, 1.5]);
+    let refused = MemberSource::new(&bad.to_string(), w, h, &k, frame, flow, reliable);
+    let (name, message) = name_and_message(refused.err().unwrap());
+    assert_eq!(name, "InvalidParameterError");
+    assert!(message.contains("expansion_factors"), "{message}");
 }

@@ -188,13 +188,14 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   };
   const start = performance.now();
   const json = JSON.stringify(options);
-  const firstPreset = options?.flowPreset ?? JSON.parse(soup.pageDefaults()).options.flowPreset;
+  const firstPreset = options?.flowPreset ?? pageDefaults.options.flowPreset;
   let made;
   // The first flow's directions when computed apart here ({ forward, backward, apart, preset,
   // ms }), and the milliseconds of directions computed before the run asked for them (handed
   // to it, or computed first), which its report's flow time has yet to count.
   let firstFlow = null;
   let uncountedMs = given?.ms ?? 0;
+  let flowsApart = 0; // flows of which a helper computed one direction
   // A nested worker loads its script through this worker's event loop: the helpers are
   // waited for here, not while the kept pass holds the loop.
   const helpers = await startHelpers(wanted);
@@ -223,6 +224,7 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
     try {
       const asked = JSON.stringify({ ...options, flowPreset: preset });
       const flow = await directionsApart(pixels, asked, helpers, (f) => progress?.(stage, from + (to - from) * f));
+      flowsApart += Number(flow.apart);
       firstFlow ??= { ...flow, preset };
       return flow;
     } catch (e) {
@@ -274,9 +276,9 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
     legend: JSON.parse(current.depthLegend(64)),
     report: JSON.parse(current.report()),
     // `helpers`: the helper workers that made members (www/pipeline.js's lastRun.worker);
-    // `flowApart`: whether a helper computed one of the first flow's directions.
+    // `flowsApart`: how many of the run's flows had one direction computed by a helper.
     timings: {
-      pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length, flowApart: firstFlow?.apart === true,
+      pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length, flowsApart,
     },
     memoryBytes: soup.memoryBytes(),
     // The first flow's directions when computed apart: the page gives them back to the run
@@ -365,7 +367,7 @@ function threadsFor(options, quiet, width, height) {
     return 1;
   }
   // Options that do not say take the library's defaults.
-  const defaults = JSON.parse(soup.pageDefaults()).options;
+  const defaults = pageDefaults.options;
   const members = options?.params?.ensemble?.members ?? defaults.params.ensemble.members;
   const maxSide = options?.maxSide ?? defaults.maxSide;
   const shrink = Math.min(1, maxSide / Math.max(width, height));
@@ -679,6 +681,9 @@ async function compiledModule() {
 /** This worker's compiled module (see compiledModule), for its helpers. */
 let compiled = null;
 
+/** The page's defaults (src/web/reconstruct.rs, `pageDefaults`), read once the module is loaded. */
+let pageDefaults = null;
+
 async function main() {
   try {
     compiled = await compiledModule();
@@ -700,7 +705,8 @@ async function main() {
       }
     });
   };
-  postMessage({ type: 'ready', version: soup.version(), defaults: JSON.parse(soup.pageDefaults()), build: BUILD });
+  pageDefaults = JSON.parse(soup.pageDefaults());
+  postMessage({ type: 'ready', version: soup.version(), defaults: pageDefaults, build: BUILD });
 }
 
 main();

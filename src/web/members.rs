@@ -25,7 +25,7 @@
 use js_sys::{Float32Array, Float64Array, Uint8Array, Uint32Array};
 use wasm_bindgen::prelude::*;
 
-use super::reconstruct::{PageReconstruction, RunOptions, js_error};
+use super::reconstruct::{PageReconstruction, js_error, parse_options};
 use crate::Grid;
 use crate::camera::Intrinsics;
 use crate::error::Error;
@@ -125,8 +125,8 @@ impl VoteBuffers {
 }
 
 /// What a helper worker makes members from: a run's [`MemberInputs`] and its options (the same
-/// JSON [`RunOptions`] the run was given: the members use its parameters), held once in this
-/// instance's memory for all the members it makes.
+/// JSON [`RunOptions`](super::reconstruct::RunOptions) the run was given: the members use its
+/// parameters), held once in this instance's memory for all the members it makes.
 #[wasm_bindgen]
 pub struct MemberSource {
     frame: Frame,
@@ -140,7 +140,8 @@ pub struct MemberSource {
 impl MemberSource {
     /// From [`MemberInputs`]' `width`, `height`, `intrinsics`, `frame`, `flow` and `reliable`
     /// and the run's options. Throws an `InvalidParameterError` when the arrays do not fit the
-    /// size or the options cannot be read.
+    /// size, or the options cannot be read or hold a parameter out of its range (as
+    /// `reconstruct` does).
     #[wasm_bindgen(constructor)]
     pub fn new(
         options: &str,
@@ -151,8 +152,7 @@ impl MemberSource {
         flow: Vec<f32>,
         reliable: Vec<u8>,
     ) -> Result<MemberSource, JsValue> {
-        let options: RunOptions = serde_json::from_str(options)
-            .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))?;
+        let options = parse_options(options)?;
         let &[fx, fy, cx, cy] = intrinsics else {
             return Err(js_error(Error::InvalidParameter(format!(
                 "a member's intrinsics are [fx, fy, cx, cy], not {} numbers",

@@ -382,7 +382,7 @@ pub fn flow_direction(
 
 /// The run's options from their JSON ([`RunOptions`]), their parameters checked
 /// ([`Params::validate`]).
-fn parse_options(options: &str) -> Result<RunOptions, JsValue> {
+pub(super) fn parse_options(options: &str) -> Result<RunOptions, JsValue> {
     let options: RunOptions = serde_json::from_str(options)
         .map_err(|e| js_error(Error::InvalidParameter(format!("options: {e}"))))?;
     options.params.validate().map_err(js_error)?;

@@ -219,14 +219,14 @@ test('the fusion\'s members made in helper workers, and the build without SIMD, 
     const { page, errors } = await openPage(session.browser, session.server.url, query);
     await page.setInputFiles('#file-input', SAMPLE);
     assert.equal(await waitForRunEnd(page), 'done', await alertText(page));
-    const { helpers, flowApart } = await page.evaluate(() => window.soupPage.lastRun.worker);
+    const { helpers, flowsApart } = await page.evaluate(() => window.soupPage.lastRun.worker);
     const cores = await page.evaluate(() => navigator.hardwareConcurrency);
     const build = await page.evaluate(() => document.body.dataset.workerBuild);
     const depth = await download(page, 'depth.pfm');
     const report = JSON.parse((await download(page, 'report.json')).toString('utf8'));
     assert.deepEqual(errors, []);
     await page.context().close();
-    return { helpers, flowApart, cores, build, depth, report };
+    return { helpers, flowsApart, cores, build, depth, report };
   };
   const alone = await runWith('?threads=1');
   const helped = await runWith('?threads=2');
@@ -234,7 +234,7 @@ test('the fusion\'s members made in helper workers, and the build without SIMD, 
   assert.equal(alone.helpers, 0);
   assert.equal(helped.helpers, helped.cores >= 2 ? 1 : 0);
   assert.equal(scalar.helpers, helped.helpers);
-  assert.deepEqual([alone.flowApart, helped.flowApart], [false, helped.helpers > 0]);
+  assert.deepEqual([alone.flowsApart, helped.flowsApart > 0], [0, helped.helpers > 0]);
   assert.deepEqual([alone.build, helped.build, scalar.build], ['soup_worker_simd', 'soup_worker_simd', 'soup_worker']);
   for (const other of [helped, scalar]) {
     assert.ok(alone.depth.equals(other.depth), `the depth of ${other.build} with ${other.helpers} helpers differs`);
