@@ -688,6 +688,7 @@ async function main() {
   try {
     compiled = await compiledModule();
     await soup.default({ module_or_path: compiled });
+    pageDefaults = JSON.parse(soup.pageDefaults());
   } catch (e) {
     postMessage({ type: 'failed', message: `could not load the WebAssembly module: ${e.message ?? e}` });
     return;
@@ -705,7 +706,6 @@ async function main() {
       }
     });
   };
-  pageDefaults = JSON.parse(soup.pageDefaults());
   postMessage({ type: 'ready', version: soup.version(), defaults: pageDefaults, build: BUILD });
 }
 
