@@ -195,7 +195,7 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
   // to it, or computed first), which its report's flow time has yet to count.
   let firstFlow = null;
   let uncountedMs = given?.ms ?? 0;
-  let flowsApart = 0; // flows of which a helper computed one direction
+  let flowsApart = 0; // flow computations of which a helper computed one direction
   // A nested worker loads its script through this worker's event loop: the helpers are
   // waited for here, not while the kept pass holds the loop.
   const helpers = await startHelpers(wanted);
@@ -275,8 +275,9 @@ async function run(id, { frames, options, quiet = false, flow: given = null }) {
     pictures,
     legend: JSON.parse(current.depthLegend(64)),
     report: JSON.parse(current.report()),
-    // `helpers`: the helper workers that made members (www/pipeline.js's lastRun.worker);
-    // `flowsApart`: how many of the run's flows had one direction computed by a helper.
+    // `helpers`: the helper workers that made members (lastRun.worker, www/page/worker-client.js);
+    // `flowsApart`: how many of the run's flow computations had one direction computed by a
+    // helper (a pass kept after a finer one, other than the first, computes its flow again).
     timings: {
       pixelsMs, reconstructMs, collectMs: performance.now() - collect, helpers: helpers.length, flowsApart,
     },
