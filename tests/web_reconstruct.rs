@@ -58,6 +58,17 @@ fn run(one: &Frame, two: &Frame, options: &str) -> Result<PageReconstruction, Js
     reconstruct(builder(one), builder(two), options, None)
 }
 
+/// `reconstructUnfused` of `one` and `two` with `options`, its flows' directions asked of
+/// `directions` (see [`directions`]; `None` computes them in wasm).
+fn run_unfused(
+    one: &Frame,
+    two: &Frame,
+    options: &str,
+    directions: Option<Function>,
+) -> impl Future<Output = Result<PageReconstruction, JsValue>> + use<> {
+    reconstruct_unfused(builder(one), builder(two), options.into(), None, directions)
+}
+
 /// Asserts that `a` and `b` export the same bytes for each of `files`.
 fn assert_same_files(a: &mut PageReconstruction, b: &mut PageReconstruction, files: &[&str]) {
     for &file in files {
@@ -459,13 +470,7 @@ async fn flow_directions_given_apart_fit_the_frames_and_give_the_same_result() {
     let asked = Rc::new(RefCell::new(Vec::new()));
     let unfused = |answer: JsValue| {
         let request = directions(&asked, move |_| answer.clone());
-        reconstruct_unfused(
-            builder(&s.frame1),
-            builder(&s.frame2),
-            options.clone(),
-            None,
-            Some(request),
-        )
+        run_unfused(&s.frame1, &s.frame2, &options, Some(request))
     };
     let half = js_sys::Object::new();
     let full = js_sys::Float32Array::from(&vec![0.0f32; 2 * 64 * 48][..]);
@@ -486,15 +491,9 @@ async fn flow_directions_given_apart_fit_the_frames_and_give_the_same_result() {
         &asked,
         computed_directions(&s.frame1, &s.frame2, &options, 0.0),
     );
-    let mut apart = reconstruct_unfused(
-        builder(&s.frame1),
-        builder(&s.frame2),
-        options.clone(),
-        None,
-        Some(request),
-    )
-    .await
-    .unwrap();
+    let mut apart = run_unfused(&s.frame1, &s.frame2, &options, Some(request))
+        .await
+        .unwrap();
     assert_eq!(*asked.borrow(), ["fine", "high"]);
     assert_same_files(
         &mut apart,
@@ -512,15 +511,7 @@ async fn a_pass_kept_after_a_finer_one_is_given_its_flow_again() {
     let s = render(SceneKind::Table, 64, 48).unwrap();
     let k = serde_json::to_string(&s.intrinsics).unwrap();
     let options = options(&format!(r#"{{"intrinsics": {k}}}"#));
-    let unfused = |directions| {
-        reconstruct_unfused(
-            builder(&s.frame1),
-            builder(&s.frame2),
-            options.clone(),
-            None,
-            directions,
-        )
-    };
+    let unfused = |directions| run_unfused(&s.frame1, &s.frame2, &options, directions);
     let asked = Rc::new(RefCell::new(Vec::new()));
     let answer = computed_directions(&s.frame1, &s.frame2, &options, 0.0);
     let mut apart = unfused(Some(directions(&asked, answer))).await.unwrap();
@@ -551,15 +542,9 @@ async fn members_made_in_other_workers_fuse_to_the_same_result() {
     let asked = Rc::new(RefCell::new(Vec::new()));
     let answer = computed_directions(&s.frame1, &s.frame2, &options, 1000.0);
     let request = directions(&asked, answer);
-    let mut parts = reconstruct_unfused(
-        builder(&s.frame1),
-        builder(&s.frame2),
-        options.clone(),
-        None,
-        Some(request),
-    )
-    .await
-    .unwrap();
+    let mut parts = run_unfused(&s.frame1, &s.frame2, &options, Some(request))
+        .await
+        .unwrap();
     assert_eq!(*asked.borrow(), ["fine"]);
     let inputs = parts.member_inputs();
     let counts = parts.member_counts().to_vec();
