@@ -1,11 +1,14 @@
-//! Timings of the soup stages (everything after flow and superpixels: motion hypotheses,
+//! Timings of the soup stages (everything after flow and superpixels: the focal length's search
+//! where none was given, motion hypotheses,
 //! assignment, planes, contact scales, refinement, fusion of the members, outputs) at 1024×436
 //! with exact flow, one thread except the fusion's members, which natively run on up to four
 //! threads (as many as there are cores). Run with `cargo bench --bench soup`.
 
 mod common;
 
+use superpixel_soup::camera::Intrinsics;
 use superpixel_soup::flow::is_known;
+use superpixel_soup::focal::estimate_focal;
 use superpixel_soup::input::prepare_pair;
 use superpixel_soup::output::{dense_depth, point_clouds};
 use superpixel_soup::soup::init::{InitParams, unit_scale_soup};
@@ -41,6 +44,14 @@ fn main() {
             reliable: &reliable,
             intrinsics: &k,
         };
+        // The focal length's search, which runs only where no focal length was given.
+        let guess = Intrinsics::default_for(1024, 436);
+        let times = common::time_ms(3, || estimate_focal(&s.flow12, &reliable, &guess));
+        common::print_row(
+            &format!("focal length from the flow ({})", kind.name()),
+            "1024×436",
+            &times,
+        );
         let init = || unit_scale_soup(&sp, &knn, &adjacency, &s.flow12, &reliable, &k, &params);
         let times = common::time_ms(3, init);
         common::print_row(

@@ -26,6 +26,9 @@ pub enum IntrinsicsSource {
     Exif,
     /// Guessed: fx = fy = max(W, H), principal point at the image centre.
     Default,
+    /// Estimated from the two frames' flow where they fix it ([`crate::focal`]), in place of
+    /// the guess; principal point at the image centre.
+    Estimated,
 }
 
 impl std::fmt::Display for IntrinsicsSource {
@@ -34,6 +37,7 @@ impl std::fmt::Display for IntrinsicsSource {
             IntrinsicsSource::User => "user",
             IntrinsicsSource::Exif => "EXIF",
             IntrinsicsSource::Default => "default",
+            IntrinsicsSource::Estimated => "the frames",
         })
     }
 }

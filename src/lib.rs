@@ -23,6 +23,7 @@ pub mod error;
 pub mod eval;
 pub mod export;
 pub mod flow;
+pub mod focal;
 pub mod formats;
 pub mod geometry;
 pub mod grid;

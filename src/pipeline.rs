@@ -5,11 +5,12 @@
 
 use serde::Serialize;
 
-use crate::camera::{Camera, Intrinsics};
+use crate::camera::{Camera, Intrinsics, IntrinsicsSource};
 use crate::error::{Error, Result};
 use crate::flow::{
     FlowField, FlowPair, FlowParams, Preset, compute_flow, is_known, resize_flow, trusted_share,
 };
+use crate::focal;
 use crate::grid::Grid;
 use crate::image::Frame;
 use crate::input::{FramePair, working_over_input};
@@ -579,7 +580,12 @@ async fn reconstruct_until_pinned(
         .await
         {
             Ok(again) => {
-                notes.extend_from_slice(&again.report.notes[pair.notes.len()..]);
+                // A note every pass makes alike (the focal length's) is said once.
+                for note in &again.report.notes[pair.notes.len()..] {
+                    if !notes.contains(note) {
+                        notes.push(note.clone());
+                    }
+                }
                 spent.extend_from_slice(&again.report.timings_ms);
                 last = Pass::of(&again, finer);
                 if last.improves_on(&best) {
@@ -873,6 +879,45 @@ impl Segmentation {
     }
 }
 
+/// `camera`, or where it is only the default guess, the focal length the trusted `flow` fixes
+/// ([`crate::focal`]), with a note saying which.
+fn camera_from_flow(
+    camera: Camera,
+    flow: &FlowField,
+    reliable: &Grid<bool>,
+    notes: &mut Vec<String>,
+) -> Camera {
+    if camera.source != IntrinsicsSource::Default {
+        return camera;
+    }
+    let guess = camera.intrinsics;
+    match focal::estimate_focal(flow, reliable, &guess) {
+        Some(estimate) => {
+            notes.push(format!(
+                "no focal length was given: the two frames fix it at {:.0} px (the guess was \
+                 {:.0} px, the long side)",
+                estimate.focal, guess.fx
+            ));
+            Camera {
+                intrinsics: Intrinsics {
+                    fx: estimate.focal,
+                    fy: estimate.focal,
+                    ..guess
+                },
+                source: IntrinsicsSource::Estimated,
+            }
+        }
+        None => {
+            notes.push(format!(
+                "no focal length was given and the two frames do not fix it: guessed {:.0} px \
+                 (the long side); give the intrinsics if the depth looks distorted",
+                guess.fx
+            ));
+            camera
+        }
+    }
+}
+
 /// One pass of the pipeline: flow (given, or computed by [`trusted_flow`]), superpixels (or a
 /// copy of `segmentation`, made by an earlier pass with the same frame 1 and parameters),
 /// unit-scale soup, scales, refinement and outputs.
@@ -885,7 +930,6 @@ async fn reconstruct_from(
     progress: &mut dyn FnMut(Stage, f32),
 ) -> Result<Reconstruction> {
     let (w, h) = pair.frame1.size();
-    let k = pair.camera.intrinsics;
     let mut clock = Clock::start();
     let mut notes = pair.notes.clone();
 
@@ -918,6 +962,8 @@ async fn reconstruct_from(
             "the flow is zero everywhere (identical frames?)".into(),
         ));
     }
+    let camera = camera_from_flow(pair.camera, &flow, &reliable, &mut notes);
+    let k = camera.intrinsics;
     clock.lap(Stage::Flow);
 
     let seen = Observed {
@@ -947,7 +993,7 @@ async fn reconstruct_from(
     } = solved;
 
     let report = Report {
-        camera: pair.camera,
+        camera,
         working_size: (w, h),
         input_size: pair.input_size,
         params: *params,

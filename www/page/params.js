@@ -59,7 +59,7 @@ export async function refreshIntrinsics() {
   });
   const source = camera.source === 'exif'
     ? `EXIF of frame 1 (${frame.exif.focal35mm} mm, 35 mm equivalent)`
-    : 'default guess (no EXIF focal length): f = long side, centre of the image';
+    : 'default guess (no EXIF focal length): f = long side, centre of the image; the run estimates f from the two frames where they fix it';
   setIntrinsics(camera.intrinsics, 'auto', source);
 }
 

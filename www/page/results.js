@@ -63,7 +63,7 @@ function fillSummary(report) {
     ['Input size', `${report.input_size[0]} × ${report.input_size[1]}`],
     ['Working size', `${report.working_size[0]} × ${report.working_size[1]}`],
     ['Intrinsics (working size)', `fx ${k.fx.toFixed(1)}, fy ${k.fy.toFixed(1)}, cx ${k.cx.toFixed(1)}, cy ${k.cy.toFixed(1)}`],
-    ['Intrinsics from', { user: 'you (or the sample)', exif: 'EXIF focal length', default: 'default guess' }[report.camera.source] ?? report.camera.source],
+    ['Intrinsics from', { user: 'you (or the sample)', exif: 'EXIF focal length', default: 'default guess (the frames do not fix the focal length)', estimated: 'the two frames (no EXIF focal length)' }[report.camera.source] ?? report.camera.source],
     ['Superpixels', `${report.superpixels} (${report.degenerate} without a plane of their own)`],
     ['Motion hypotheses', String(report.hypotheses)],
     ['Trusted flow', `${(100 * report.reliable_flow).toFixed(1)} % of pixels`],
