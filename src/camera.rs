@@ -24,7 +24,9 @@ pub enum IntrinsicsSource {
     User,
     /// From the photo's EXIF 35 mm-equivalent focal length.
     Exif,
-    /// Guessed: fx = fy = max(W, H), principal point at the image centre.
+    /// Guessed: fx = fy = max(W, H), principal point at the image centre. In a reconstruction's
+    /// report: the guess stood, because the two frames do not fix a focal length
+    /// ([`crate::focal`]).
     Default,
     /// Estimated from the two frames' flow where they fix it ([`crate::focal`]), in place of
     /// the guess; principal point at the image centre.

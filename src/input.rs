@@ -20,7 +20,10 @@ pub struct FramePair {
     pub frame1: Frame,
     /// Second frame, at the working resolution.
     pub frame2: Frame,
-    /// Intrinsics at the working resolution, and where they came from.
+    /// Intrinsics at the working resolution, and where they came from. A guess
+    /// ([`crate::camera::IntrinsicsSource::Default`]) is replaced by the pipeline, after the flow,
+    /// where the two frames fix the focal length ([`crate::focal`]; the report has the camera
+    /// used).
     pub camera: Camera,
     /// Size of the input images, `(width, height)`.
     pub input_size: (usize, usize),

@@ -880,7 +880,8 @@ impl Segmentation {
 }
 
 /// `camera`, or where it is only the default guess, the focal length the trusted `flow` fixes
-/// ([`crate::focal`]), with a note saying which.
+/// ([`crate::focal`]), with a note saying which (in pixels of the working size). Its time counts
+/// in [`Stage::Flow`]'s.
 fn camera_from_flow(
     camera: Camera,
     flow: &FlowField,
@@ -894,8 +895,8 @@ fn camera_from_flow(
     match focal::estimate_focal(flow, reliable, &guess) {
         Some(estimate) => {
             notes.push(format!(
-                "no focal length was given: the two frames fix it at {:.0} px (the guess was \
-                 {:.0} px, the long side)",
+                "no focal length was given: the two frames fix it at {:.0} px at the working size \
+                 (the guess was {:.0} px, its long side)",
                 estimate.focal, guess.fx
             ));
             Camera {
@@ -909,8 +910,9 @@ fn camera_from_flow(
         }
         None => {
             notes.push(format!(
-                "no focal length was given and the two frames do not fix it: guessed {:.0} px \
-                 (the long side); give the intrinsics if the depth looks distorted",
+                "no focal length was given and the two frames do not fix it: guessed {:.0} px at \
+                 the working size (its long side); give the intrinsics if the depth looks \
+                 distorted",
                 guess.fx
             ));
             camera
