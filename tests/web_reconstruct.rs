@@ -87,6 +87,25 @@ fn name_and_message(error: JsValue) -> (String, String) {
 }
 
 #[wasm_bindgen_test]
+fn without_intrinsics_the_frames_fix_the_static_room_s_focal_length() {
+    // PNG frames carry no EXIF and the options no intrinsics: the guess (the long side, 384 px)
+    // gives way to the focal length the static room's flow fixes (the scene's is 307.2 px).
+    let scene = render(SceneKind::StaticRoom, 384, 164).unwrap();
+    let result = run(&scene.frame1, &scene.frame2, &options("{}")).unwrap();
+    let report: serde_json::Value = serde_json::from_str(&result.report().unwrap()).unwrap();
+    assert_eq!(report["camera"]["source"], "estimated");
+    let fx = report["camera"]["intrinsics"]["fx"].as_f64().unwrap();
+    assert!((fx / scene.intrinsics.fx - 1.0).abs() < 0.1, "fx {fx}");
+    assert_eq!(report["camera"]["intrinsics"]["fy"].as_f64(), Some(fx));
+    let notes = report["notes"].as_array().unwrap();
+    assert!(
+        notes
+            .iter()
+            .any(|n| n.as_str().unwrap().contains("the two frames fix it"))
+    );
+}
+
+#[wasm_bindgen_test]
 fn the_street_is_reconstructed_with_pictures_clouds_and_files() {
     let scene = render(SceneKind::Street, 192, 82).unwrap();
     let stages = Rc::new(RefCell::new(Vec::<String>::new()));
