@@ -26,6 +26,7 @@
 //! Deterministic: the samples are every k-th trusted pixel, the fits use a fixed seed.
 
 use crate::camera::Intrinsics;
+use crate::eval::median;
 use crate::flow::{FlowField, is_known};
 use crate::geometry::Correspondence;
 use crate::geometry::essential::{MinimalSolver, Motion, refine_motion, robust_motion, sampson};
@@ -145,7 +146,8 @@ fn trusted_pairs(flow: &FlowField, reliable: &Grid<bool>) -> Vec<[f64; 4]> {
 
 /// A pixel pair in normalised coordinates at focal length `f` and `k`'s principal point.
 fn normalised(pair: &[f64; 4], f: f64, k: &Intrinsics) -> Correspondence {
-    let ray = |u: f64, v: f64| Vector3::new((u - k.cx) / f, (v - k.cy) / f, 1.0);
+    let k = Intrinsics { fx: f, fy: f, ..*k };
+    let ray = |u: f64, v: f64| Vector3::from(k.ray(u, v));
     Correspondence {
         x1: ray(pair[0], pair[1]),
         x2: ray(pair[2], pair[3]),
@@ -171,12 +173,10 @@ fn fit(points: &[Correspondence], f: f64) -> Option<(Motion, Vec<usize>)> {
 /// The median Sampson error (px²) of `points` under the essential matrix `e` at focal length
 /// `f`; infinite for no points.
 fn median_px2(points: &[Correspondence], e: &nalgebra::Matrix3<f64>, f: f64) -> f64 {
-    let mut errors: Vec<f64> = points.iter().map(|c| sampson(e, c) * f * f).collect();
-    if errors.is_empty() {
+    if points.is_empty() {
         return f64::INFINITY;
     }
-    let mid = errors.len() / 2;
-    *errors.select_nth_unstable_by(mid, f64::total_cmp).1
+    median(points.iter().map(|c| sampson(e, c) * f * f).collect())
 }
 
 /// The grid's minimum where it is clear (see [`MIN_RISE`]), refined by a parabola through it and
